@@ -1,0 +1,32 @@
+# Two commands: `make run` (main job on the bundled Pier 667 scenario) and `make test`.
+# Both create .venv on first use with a Python >= 3.12 found by tools/find-python.sh.
+VENV   ?= .venv
+PY     := $(VENV)/bin/python
+STAMP  := $(VENV)/.installed
+OUT    ?= out/pier667
+
+.PHONY: run test test-slow test-mpi lint bootstrap clean
+
+$(STAMP): pyproject.toml requirements.lock
+	@test -x $(PY) || { PYBIN=$$(tools/find-python.sh) && echo "creating $(VENV) with $$PYBIN" && $$PYBIN -m venv $(VENV); }
+	$(PY) -m pip install --quiet --upgrade pip
+	$(PY) -m pip install --quiet -c requirements.lock -e '.[fem,test]'
+	@touch $(STAMP)
+
+bootstrap: $(STAMP)
+
+run: $(STAMP)
+	$(VENV)/bin/pilegroup run pier667 --out $(OUT)
+
+test: $(STAMP)
+	$(VENV)/bin/ruff check .
+	$(PY) -m pytest -m "not slow" -q
+
+test-slow: $(STAMP)
+	$(PY) -m pytest -m slow -q
+
+lint: $(STAMP)
+	$(VENV)/bin/ruff check .
+
+clean:
+	rm -rf $(VENV) out build *.egg-info
