@@ -1,4 +1,4 @@
-"""The mesh handed from ``geometry`` to ``solver``: a DOLFINx mesh with named cell and facet tags."""
+"""The mesh handed from ``geometry`` to ``solver``: a DOLFINx mesh with named tags."""
 
 from __future__ import annotations
 

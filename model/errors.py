@@ -1,0 +1,30 @@
+"""Domain exceptions of pilegroup (the one module that defines them)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+
+class PilegroupError(Exception):
+    """Base class of every error pilegroup raises on purpose."""
+
+
+class ScenarioError(PilegroupError, ValueError):
+    """A scenario file or value is invalid.
+
+    The message always names the key (dotted path as in the TOML file), the value, its unit and
+    what is allowed, e.g. ``layers[2].nu = 0.55 (-): must be in (0, 0.5)``.
+    """
+
+    def __init__(self, key: str, value: Any, allowed: str, unit: str = "") -> None:
+        self.key = key
+        self.value = value
+        self.allowed = allowed
+        self.unit = unit
+        shown = repr(value) if isinstance(value, str) else value
+        unit_txt = f" ({unit})" if unit else ""
+        super().__init__(f"{key} = {shown}{unit_txt}: {allowed}")
+
+
+class ConvergenceError(PilegroupError, RuntimeError):
+    """A nonlinear or linear solve did not converge and could not be recovered by cut-back."""

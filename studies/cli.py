@@ -1,0 +1,121 @@
+"""The ``pilegroup`` command line.
+
+Exit codes: 0 success, 1 a run failed (e.g. no convergence), 2 invalid input (a clear one-line
+message naming the key, the value and what is allowed; no traceback).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import logging
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+
+from pilegroup.model import BUNDLED, PilegroupError, ScenarioError, bundled_text, load_scenario
+
+log = logging.getLogger("pilegroup")
+
+EXIT_INPUT = 2
+EXIT_FAILED = 1
+
+
+def _world_rank() -> int:
+    try:
+        from mpi4py import MPI
+    except ImportError:  # pragma: no cover - mpi4py always ships with dolfinx
+        return 0
+    return MPI.COMM_WORLD.rank
+
+
+def setup_logging(verbose: int) -> None:
+    """Log to stderr on rank 0 only (other ranks log warnings and errors)."""
+    level = logging.DEBUG if verbose > 1 else logging.INFO
+    if _world_rank() != 0:
+        level = logging.WARNING
+    logging.basicConfig(level=level, format="%(levelname)s %(name)s: %(message)s")
+
+
+def _cmd_scenario_show(args: argparse.Namespace) -> int:
+    if _world_rank() == 0:
+        sys.stdout.write(bundled_text(args.name))
+    return 0
+
+
+def _cmd_scenario_validate(args: argparse.Namespace) -> int:
+    sc = load_scenario(args.file)
+    if _world_rank() == 0:
+        print(f"{args.file}: valid scenario {sc.name!r}: {len(sc.layers)} layers, "
+              f"{sc.piles.count} piles, {len(sc.stages)} stages, end {sc.time.end_day:g} day")
+    return 0
+
+
+def _cmd_run(args: argparse.Namespace) -> int:
+    from pilegroup.studies.run import run_scenario
+
+    sc = load_scenario(args.scenario)
+    out = Path(args.out) if args.out else Path("out") / sc.name
+    summary = run_scenario(sc, out, mesh_size=args.mesh_size)
+    if _world_rank() == 0:
+        print(json.dumps(summary, indent=2))
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser of the ``pilegroup`` command."""
+    p = argparse.ArgumentParser(
+        prog="pilegroup",
+        description="3D simulation of pile groups in layered soft soil over time: Biot "
+        "consolidation, elastoplastic soil, elastic piles and cap, viscoplastic pile-soil "
+        "interface (DOLFINx, gmsh, PETSc). Scenarios are TOML files whose keys carry their "
+        "unit; bundled scenarios: " + ", ".join(BUNDLED) + ".",
+        epilog="Under MPI: mpirun -n 2 pilegroup run pier667. Exit codes: 0 ok, 1 run failed, "
+        "2 invalid input.",
+    )
+    p.add_argument("-v", "--verbose", action="count", default=0, help="more log output")
+    sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
+    ps = sub.add_parser("scenario", help="show or validate scenario files",
+                        description="Show a bundled scenario or validate a scenario file.")
+    ssub = ps.add_subparsers(dest="action", required=True, metavar="ACTION")
+    show = ssub.add_parser("show", help="print a bundled scenario (TOML, with its comments)",
+                           description="Print a bundled scenario; copy it to start your own.")
+    show.add_argument("name", nargs="?", default="pier667", choices=BUNDLED,
+                      help="bundled scenario name (default: pier667)")
+    show.set_defaults(func=_cmd_scenario_show)
+    val = ssub.add_parser("validate", help="check a scenario file and report the first problem",
+                          description="Check a scenario TOML file: unknown, missing or mistyped "
+                          "keys and out-of-range values are reported with the key, the value, "
+                          "its unit and what is allowed (exit code 2).")
+    val.add_argument("file", help="scenario TOML file (or a bundled name)")
+    val.set_defaults(func=_cmd_scenario_validate)
+
+    pr = sub.add_parser("run", help="run a scenario (main job)",
+                        description="Validate the scenario, build its mesh and run every stage "
+                        "that is implemented; write outputs and summary.json to --out.")
+    pr.add_argument("scenario", help="scenario TOML file or bundled name, e.g. pier667")
+    pr.add_argument("--out", help="output folder (default: out/<scenario name>)")
+    pr.add_argument("--mesh-size", type=float, default=None, metavar="H",
+                    help="element size at the pile surfaces in m (overrides numerics.mesh.size_m)")
+    pr.set_defaults(func=_cmd_run)
+    return p
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``pilegroup`` console script; returns the exit code."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    setup_logging(args.verbose)
+    try:
+        return int(args.func(args) or 0)
+    except ScenarioError as exc:
+        print(f"pilegroup: invalid input: {exc}", file=sys.stderr)
+        return EXIT_INPUT
+    except PilegroupError as exc:
+        print(f"pilegroup: failed: {exc}", file=sys.stderr)
+        return EXIT_FAILED
+
+
+if __name__ == "__main__":
+    sys.exit(main())
