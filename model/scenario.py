@@ -345,19 +345,43 @@ class Time:
 
 @dataclass(frozen=True)
 class MeshOptions:
-    """Mesh sizing: ``size_m`` is h at the pile surfaces (the paper's mesh-study parameter)."""
+    """Mesh sizing (m unless stated); ``size_m`` is h at the pile surfaces (the paper's study).
+
+    Plan view: quads sized ``size_m`` next to the piles, at least ``n_circ_min`` edges around a
+    pile, growing by ``growth`` per element to ``far_field_size_m``. Vertical (extrusion):
+    ``dz_surface_m`` at the ground, ``dz_toe_m`` at the pile toes, at most ``dz_max_m`` down to the
+    deepest toe and ``dz_max_deep_m`` below it, growing by ``dz_growth``; ``dz_cap_m`` in the cap;
+    at least ``min_layer_divisions`` elements across every layer.
+    """
 
     size_m: float = 1.0
     far_field_size_m: float = 8.0
-    vertical_size_m: float = 2.0
-    vertical_refined_size_m: float = 0.5
+    growth: float = 1.3
+    n_circ_min: int = 32
+    dz_surface_m: float = 0.5
+    dz_toe_m: float = 0.5
+    dz_max_m: float = 2.0
+    dz_max_deep_m: float = 4.0
+    dz_growth: float = 1.2
+    dz_cap_m: float = 0.5
+    min_layer_divisions: int = 2
 
     def __post_init__(self) -> None:
-        for key in ("size_m", "far_field_size_m", "vertical_size_m", "vertical_refined_size_m"):
+        for key in ("size_m", "far_field_size_m", "dz_surface_m", "dz_toe_m", "dz_max_m",
+                    "dz_max_deep_m", "dz_cap_m"):
             _positive(key, getattr(self, key), "m")
         if self.far_field_size_m < self.size_m:
             raise ScenarioError("far_field_size_m", self.far_field_size_m,
                                 f"must be >= size_m = {self.size_m:g}", "m")
+        for key in ("growth", "dz_growth"):
+            if not 1.0 < getattr(self, key) <= 2.0:
+                raise ScenarioError(key, getattr(self, key), "must be in (1, 2]", "-")
+        if self.n_circ_min < 8 or self.n_circ_min % 4:
+            raise ScenarioError("n_circ_min", self.n_circ_min,
+                                "must be a multiple of 4, >= 8", "-")
+        if self.min_layer_divisions < 1:
+            raise ScenarioError("min_layer_divisions", self.min_layer_divisions,
+                                "must be an integer >= 1", "-")
 
 
 @dataclass(frozen=True)

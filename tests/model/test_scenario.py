@@ -204,3 +204,14 @@ def test_missing_file_and_bad_toml(tmp_path, capsys):
 def test_show_prints_bundled_scenario(capsys):
     assert main(["scenario", "show"]) == 0
     assert capsys.readouterr().out == PIER
+
+
+def test_geometry_adapter_reproduces_bundled_pier():
+    from pilegroup.geometry.adapter import geometry_spec
+    from pilegroup.geometry.spec import pier667_default
+
+    g = geometry_spec(load_scenario("pier667"))
+    ref = pier667_default()
+    assert (g.block, g.piles, g.cap, g.sizing) == (ref.block, ref.piles, ref.cap, ref.sizing)
+    assert [lay.thickness for lay in g.layers] == [lay.thickness for lay in ref.layers]
+    assert geometry_spec(load_scenario("pier667"), mesh_size=0.3).sizing.h_pile == 0.3
