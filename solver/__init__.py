@@ -1,1 +1,54 @@
-"""pilegroup.solver."""
+"""pilegroup.solver: u–p Biot consolidation with quadrature-point soil state.
+
+Build a :class:`BiotProblem` from a ``MeshData``, materials per cell group, boundary conditions
+and loads; run :func:`run_stages` over a list of :class:`Stage` with :class:`TimeStepping`.
+Units kN, m, day; tension positive; ``p`` = excess pore pressure (compression positive).
+"""
+
+from pilegroup.solver.biot import BiotProblem, StepInfo, eps_mandel
+from pilegroup.solver.errors import ConvergenceError, SolverError, SolverInputError, StepFailure
+from pilegroup.solver.inputs import (
+    GAMMA_W,
+    K_WATER,
+    Discretisation,
+    DisplacementBC,
+    NewtonOptions,
+    PressureBC,
+    RigidPlate,
+    SoilMaterial,
+    SolverOptions,
+    Stage,
+    SurfaceLoad,
+    TimeStepping,
+)
+from pilegroup.solver.linsolve import PRESETS, Preset, merged_options
+from pilegroup.solver.stepping import AdaptiveStepper, RunLog, StepRecord, run_stages
+
+__all__ = [
+    "GAMMA_W",
+    "K_WATER",
+    "PRESETS",
+    "AdaptiveStepper",
+    "BiotProblem",
+    "ConvergenceError",
+    "Discretisation",
+    "DisplacementBC",
+    "NewtonOptions",
+    "Preset",
+    "PressureBC",
+    "RigidPlate",
+    "RunLog",
+    "SoilMaterial",
+    "SolverError",
+    "SolverInputError",
+    "SolverOptions",
+    "Stage",
+    "StepFailure",
+    "StepInfo",
+    "StepRecord",
+    "SurfaceLoad",
+    "TimeStepping",
+    "eps_mandel",
+    "merged_options",
+    "run_stages",
+]

@@ -1,0 +1,624 @@
+"""u–p Biot consolidation on a :class:`~pilegroup.geometry.meshdata.MeshData`.
+
+Physics (design.md §4). Units kN, m, day; tension positive; ``p`` = excess pore pressure,
+compression of the water positive; effective stress ``sigma' = sigma + p I`` (Biot coefficient 1,
+incompressible grains).
+
+* Momentum (excess-pressure form): ``div(sigma' - p I) + b' = 0`` with ``b' = -(gamma_sat -
+  GAMMA_W) e_z`` the buoyant weight (only with ``self_weight``). The geostatic effective stress
+  is the law's initial state, in equilibrium with ``b'``; loads act on top of it.
+* Mass, backward Euler over ``dt`` (multiplied by dt):
+  ``S (p - p_n) + div(u - u_n) - dt div((k/GAMMA_W) grad p) = 0``, ``S = n / K_w``.
+  ``dt = 0`` is an undrained step.
+* Soil stress and tangent come from the constitutive law at the quadrature points
+  (:mod:`.qpstate`); the Jacobian is the consistent tangent.
+
+Discretisation: Q2–Q1 (Taylor–Hood on hexahedra) or Q1–Q1 with the polynomial pressure
+projection of Bochev, Dohrmann & Gunzburger (SIAM J. Numer. Anal. 44, 2006) in the form used for
+consolidation by White & Borja (Comput. Methods Appl. Mech. Engrg. 197, 2008): the mass balance
+gets ``tau * int (dp - Pi0 dp)(q - Pi0 q)`` with ``dp = p - p_n``, ``Pi0`` the cell-wise L2
+projection on constants and ``tau = stab_factor / (2 G)``. On parallelepiped cells the value of
+a Q1 function at the centroid is its cell mean, so the term is the full-quadrature mass matrix
+minus the one-point (centroid) mass matrix.
+
+Fields are kept as a list of blocks ``[u, p]`` assembled as one blocked (monolithic) PETSc matrix,
+so further blocks (e.g. a pile displacement on a sub-mesh, joined by interface terms) can be
+appended without changing the Newton loop.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from pilegroup.solver.errors import ConvergenceError, SolverInputError
+from pilegroup.solver.inputs import (
+    GAMMA_W,
+    Discretisation,
+    DisplacementBC,
+    PressureBC,
+    RigidPlate,
+    SoilMaterial,
+    SolverOptions,
+    SurfaceLoad,
+)
+from pilegroup.solver.linsolve import check_reason, create_ksp, get_preset
+from pilegroup.solver.qpstate import QuadratureState
+
+SQRT2 = math.sqrt(2.0)
+
+
+@dataclass
+class StepInfo:
+    """Outcome of one attempted step."""
+
+    converged: bool
+    newton_its: int = 0
+    ksp_its: int = 0
+    residuals: list[tuple[float, float]] = field(default_factory=list)
+    message: str = ""
+    seconds: float = 0.0
+
+
+def eps_mandel(u: Any) -> Any:
+    """Mandel strain 6-vector ``(xx, yy, zz, sqrt2 xy, sqrt2 xz, sqrt2 yz)`` of ``u`` (UFL)."""
+    import ufl
+
+    e = ufl.sym(ufl.grad(u))
+    return ufl.as_vector(
+        [e[0, 0], e[1, 1], e[2, 2], SQRT2 * e[0, 1], SQRT2 * e[0, 2], SQRT2 * e[1, 2]]
+    )
+
+
+class BiotProblem:
+    """Coupled u–p problem with quadrature-point soil state and its own Newton solver.
+
+    Args:
+        md: mesh and tags.
+        materials: cell-group name -> :class:`SoilMaterial`; every cell must be covered.
+        disc: element pair.
+        displacement_bcs: prescribed displacement components.
+        pressure_bcs: prescribed excess pore pressures (drained boundaries).
+        loads: surface pressures.
+        plates: rigid plates under force control (at most one).
+        options: linear solver and Newton options.
+        self_weight: apply the buoyant weight (geostatic stress must then balance it).
+    """
+
+    def __init__(
+        self,
+        md: Any,
+        materials: Mapping[str, SoilMaterial],
+        disc: Discretisation | None = None,
+        displacement_bcs: Sequence[DisplacementBC] = (),
+        pressure_bcs: Sequence[PressureBC] = (),
+        loads: Sequence[SurfaceLoad] = (),
+        plates: Sequence[RigidPlate] = (),
+        options: SolverOptions | None = None,
+        self_weight: bool = True,
+    ) -> None:
+        import basix.ufl
+        import ufl
+        from dolfinx import default_scalar_type, fem
+        from dolfinx.fem import petsc as fpetsc
+
+        self.md = md
+        self.mesh = mesh = md.mesh
+        self.comm = mesh.comm
+        self.disc = disc = disc or Discretisation()
+        self.options = options or SolverOptions()
+        self.materials = dict(materials)
+        self.displacement_bcs = tuple(displacement_bcs)
+        self.pressure_bcs = tuple(pressure_bcs)
+        self.loads = tuple(loads)
+        self.plates = tuple(plates)
+        if len(self.plates) > 1:
+            raise SolverInputError(f"plates: {len(self.plates)} given; allowed: at most 1")
+        self.self_weight = self_weight
+        self.timings: dict[str, float] = {"assemble_F": 0.0, "assemble_J": 0.0, "solve": 0.0,
+                                          "law": 0.0}
+        tdim = mesh.topology.dim
+        fdim = tdim - 1
+        mesh.topology.create_connectivity(fdim, tdim)
+
+        # --- cells per material group (owned cells)
+        imap = mesh.topology.index_map(tdim)
+        n_owned = imap.size_local
+        groups: dict[str, tuple[SoilMaterial, np.ndarray]] = {}
+        covered = np.zeros(n_owned + imap.num_ghosts, dtype=bool)
+        for name, mat in self.materials.items():
+            if not isinstance(mat, SoilMaterial):
+                raise SolverInputError(
+                    f"materials[{name!r}] = {type(mat).__name__}; only SoilMaterial is supported "
+                    "(elastic piles without pressure need the pile sub-mesh of issue 6)"
+                )
+            cells = md.cell_tags.find(md.cell_tag(name))
+            covered[cells] = True
+            groups[name] = (mat, cells[cells < n_owned])
+        if not covered[:n_owned].all():
+            raise SolverInputError(
+                f"materials cover {int(covered[:n_owned].sum())} of {n_owned} owned cells; "
+                f"cell groups: {sorted(md.cell_names)}"
+            )
+
+        # --- spaces and functions
+        cell = mesh.basix_cell()
+        Ve = basix.ufl.element("Lagrange", cell, disc.u_degree, shape=(3,))
+        Qe = basix.ufl.element("Lagrange", cell, 1)
+        self.V = V = fem.functionspace(mesh, Ve)
+        self.Q = Q = fem.functionspace(mesh, Qe)
+        self.u = fem.Function(V, name="displacement")
+        self.p = fem.Function(Q, name="excess_pore_pressure")
+        self.u_n = fem.Function(V)
+        self.p_n = fem.Function(Q)
+        self.fields = [self.u, self.p]
+        self.fields_n = [self.u_n, self.p_n]
+
+        # --- material coefficients (DG0)
+        D0 = fem.functionspace(mesh, ("DG", 0))
+        self._S = fem.Function(D0)
+        self._mob = fem.Function(D0)
+        self._gam = fem.Function(D0)
+        self._tau = fem.Function(D0)
+        self._beta = fem.Function(D0)
+        for name, mat in self.materials.items():
+            cells = md.cell_tags.find(md.cell_tag(name))
+            K, G = mat.elastic_moduli()
+            self._S.x.array[cells] = mat.storage
+            self._mob.x.array[cells] = mat.mobility
+            self._gam.x.array[cells] = mat.gamma_sat - GAMMA_W
+            self._tau.x.array[cells] = disc.stab_factor / (2.0 * G)
+            self._beta.x.array[cells] = 1.0 / K
+
+        self.dt = fem.Constant(mesh, default_scalar_type(0.0))
+        self.load_factor = 0.0
+        qdeg = disc.quadrature_degree
+        dx = ufl.Measure("dx", domain=mesh)
+        dxq = ufl.Measure("dx", domain=mesh, metadata={"quadrature_degree": qdeg})
+        ds = ufl.Measure("ds", domain=mesh, subdomain_data=md.facet_tags)
+        self.qp = QuadratureState(mesh, groups, qdeg, eps_mandel(self.u) - eps_mandel(self.u_n))
+        sig, Dt = self.qp.stress, self.qp.tangent
+
+        u, p, u_n, p_n = self.u, self.p, self.u_n, self.p_n
+        v, q = ufl.TestFunction(V), ufl.TestFunction(Q)
+        du, dp = ufl.TrialFunction(V), ufl.TrialFunction(Q)
+        nrm = ufl.FacetNormal(mesh)
+        F_u = ufl.inner(sig, eps_mandel(v)) * dxq - p * ufl.div(v) * dx
+        if self_weight:
+            F_u += self._gam * v[2] * dx
+        self._load_consts = []
+        for ld in self.loads:
+            c = fem.Constant(mesh, default_scalar_type(0.0))
+            self._load_consts.append((ld, c))
+            F_u += c * ufl.inner(nrm, v) * ds(md.facet_tag(ld.facet))
+        S, mob, dt = self._S, self._mob, self.dt
+        F_p = (S * (p - p_n) + ufl.div(u - u_n)) * q * dx + dt * mob * ufl.inner(
+            ufl.grad(p), ufl.grad(q)) * dx
+        J_pp = S * dp * q * dx + dt * mob * ufl.inner(ufl.grad(dp), ufl.grad(q)) * dx
+        self.stabilised = disc.pair == "Q1Q1" and disc.stabilise
+        if self.stabilised:
+            dx_full = ufl.Measure("dx", domain=mesh, metadata={"quadrature_degree": 2})
+            dx_one = ufl.Measure("dx", domain=mesh, metadata={"quadrature_degree": 1})
+            tau = self._tau
+            F_p += tau * (p - p_n) * q * dx_full - tau * (p - p_n) * q * dx_one
+            J_pp += tau * dp * q * dx_full - tau * dp * q * dx_one
+        J_uu = ufl.inner(ufl.dot(Dt, eps_mandel(du)), eps_mandel(v)) * dxq
+        J_up = -dp * ufl.div(v) * dx
+        J_pu = ufl.div(du) * q * dx
+        self._F_forms = fem.form([F_u, F_p])
+        self._F_u_form = fem.form(F_u)
+        self._J_forms = fem.form([[J_uu, J_up], [J_pu, J_pp]])
+        preset = get_preset(self.options.preset)
+        self._P_forms = None
+        if preset.fixed_stress:
+            self._P_forms = fem.form(
+                [[J_uu, J_up], [J_pu, J_pp + self._beta * dp * q * dx]])
+
+        # --- boundary conditions
+        self._bcs = []
+        self._bcs_zero = []
+        self._u_bc_consts: list[tuple[DisplacementBC, Any]] = []
+        for bc in self.displacement_bcs:
+            if bc.component not in (0, 1, 2):
+                raise SolverInputError(f"DisplacementBC.component = {bc.component}; allowed 0-2")
+            facets = md.facet_tags.find(md.facet_tag(bc.facet))
+            dofs = fem.locate_dofs_topological(V.sub(bc.component), fdim, facets)
+            c = fem.Constant(mesh, default_scalar_type(0.0))
+            self._u_bc_consts.append((bc, c))
+            self._bcs.append(fem.dirichletbc(c, dofs, V.sub(bc.component)))
+            self._bcs_zero.append(fem.dirichletbc(default_scalar_type(0.0), dofs,
+                                                  V.sub(bc.component)))
+        for pbc in self.pressure_bcs:
+            if pbc.facet is None:
+                qmap = Q.dofmap.index_map
+                dofs = np.arange(qmap.size_local + qmap.num_ghosts, dtype=np.int32)
+            else:
+                facets = md.facet_tags.find(md.facet_tag(pbc.facet))
+                dofs = fem.locate_dofs_topological(Q, fdim, facets)
+            self._bcs.append(fem.dirichletbc(default_scalar_type(pbc.value), dofs, Q))
+            self._bcs_zero.append(fem.dirichletbc(default_scalar_type(0.0), dofs, Q))
+        self.plate_U = 0.0
+        self._plate = None
+        if self.plates:
+            pl = self.plates[0]
+            facets = md.facet_tags.find(md.facet_tag(pl.facet))
+            dofs = fem.locate_dofs_topological(V.sub(pl.component), fdim, facets)
+            cU = fem.Constant(mesh, default_scalar_type(0.0))
+            cunit = fem.Constant(mesh, default_scalar_type(-1.0))
+            self._bcs.append(fem.dirichletbc(cU, dofs, V.sub(pl.component)))
+            unit_bc = fem.dirichletbc(cunit, dofs, V.sub(pl.component))
+            owned = dofs[dofs < V.dofmap.index_map.size_local * 3]
+            self._plate = {"spec": pl, "U": cU, "unit_bcs": self._bcs_zero + [unit_bc],
+                           "owned": owned, "db": None}
+            self._bcs_zero.append(fem.dirichletbc(default_scalar_type(0.0), dofs,
+                                                  V.sub(pl.component)))
+
+        # --- PETSc objects (created once; sparsity reused)
+        self.A = fpetsc.create_matrix(self._J_forms)
+        self.P = fpetsc.create_matrix(self._P_forms) if self._P_forms is not None else None
+        spaces = fem.extract_function_spaces(self._F_forms)
+        self.b = fpetsc.create_vector(spaces)
+        self.x = fpetsc.create_vector(spaces)
+        self.dx_vec = fpetsc.create_vector(spaces)
+        self._tmp = fpetsc.create_vector(spaces)
+        self._bcs0_zero = fem.bcs_by_block(spaces, self._bcs_zero)
+        self._bc_targets = [(bc, self.u if V._cpp_object.contains(bc.function_space) else self.p)
+                            for bc in self._bcs]
+        is_u = is_p = nns = None
+        if preset.fieldsplit:
+            is_u, is_p = self._index_sets()
+            nns = self._rigid_body_modes()
+        self.ksp = create_ksp(self.comm, self.A, self.P, self.options.prefix,
+                              self.options.preset, self.options.overrides, is_u, is_p, nns)
+        self._matrix_key: float | None = None  # dt of the assembled matrix (linear reuse)
+        self._R_run = np.zeros(2)
+        self.qp.initialise({})
+
+    # ------------------------------------------------------------------ sizes and helpers
+    @property
+    def num_dofs(self) -> int:
+        """Global number of unknowns (u and p)."""
+        return int(self.V.dofmap.index_map.size_global * 3 + self.Q.dofmap.index_map.size_global)
+
+    def _index_sets(self) -> tuple[Any, Any]:
+        from petsc4py import PETSc
+
+        nu = self.V.dofmap.index_map.size_local * 3
+        npr = self.Q.dofmap.index_map.size_local
+        r0 = self.A.getOwnershipRange()[0]
+        is_u = PETSc.IS().createStride(nu, first=r0, step=1, comm=self.comm)
+        is_p = PETSc.IS().createStride(npr, first=r0 + nu, step=1, comm=self.comm)
+        is_u.setBlockSize(3)
+        return is_u, is_p
+
+    def _rigid_body_modes(self) -> Any:
+        """Six rigid-body modes of the displacement space as a PETSc near-nullspace."""
+        from dolfinx import la
+        from petsc4py import PETSc
+
+        V = self.V
+        imap = V.dofmap.index_map
+        nloc = imap.size_local
+        basis = [la.vector(imap, bs=3, dtype=PETSc.ScalarType) for _ in range(6)]
+        x = V.tabulate_dof_coordinates()[:nloc]
+        b = [v.array.reshape(-1, 3) for v in basis]
+        for i in range(3):
+            b[i][:nloc, i] = 1.0
+        b[3][:nloc, 0], b[3][:nloc, 1] = -x[:, 1], x[:, 0]
+        b[4][:nloc, 0], b[4][:nloc, 2] = x[:, 2], -x[:, 0]
+        b[5][:nloc, 2], b[5][:nloc, 1] = x[:, 1], -x[:, 2]
+        la.orthonormalize(basis)
+        vecs = []
+        for v in basis:
+            w = PETSc.Vec().createMPI((nloc * 3, PETSc.DECIDE), comm=self.comm)
+            w.array[:] = v.array[: nloc * 3]
+            vecs.append(w)
+        return PETSc.NullSpace().create(vectors=vecs, comm=self.comm)
+
+    def _set_step_constants(self, dt: float, load_factor: float) -> None:
+        self.dt.value = dt
+        self.load_factor = load_factor
+        for ld, c in self._load_consts:
+            c.value = ld.pressure * (load_factor if ld.ramp else 1.0)
+        for bc, c in self._u_bc_consts:
+            c.value = bc.value * (load_factor if bc.ramp else 1.0)
+
+    def _fields_to_x(self, x: Any) -> None:
+        from dolfinx.fem.petsc import assign
+
+        assign(self.fields, x)
+
+    def _x_to_fields(self, x: Any) -> None:
+        from dolfinx.fem.petsc import assign
+        from petsc4py import PETSc
+
+        x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+        assign(x, self.fields)
+
+    def _block_norms(self, vec: Any) -> np.ndarray:
+        off0, _ = vec.getAttr("_blocks")
+        a = vec.array_r
+        loc = np.array([float(a[off0[i]:off0[i + 1]] @ a[off0[i]:off0[i + 1]]) for i in (0, 1)])
+        from mpi4py import MPI
+
+        return np.sqrt(self.comm.allreduce(loc, op=MPI.SUM))
+
+    # ------------------------------------------------------------------ assembly
+    def _evaluate_law(self) -> None:
+        t0 = time.perf_counter()
+        self.qp.evaluate(float(self.dt.value))
+        self.timings["law"] += time.perf_counter() - t0
+
+    def _apply_bc_values(self) -> None:
+        """Put the prescribed values into the fields; Newton increments then vanish there."""
+        for bc, f in self._bc_targets:
+            bc.set(f.x.array)
+
+    def _assemble_residual(self) -> None:
+        """Residual with zero rows at constrained dofs (their values are already imposed)."""
+        from dolfinx.fem import petsc as fpetsc
+        from petsc4py import PETSc
+
+        t0 = time.perf_counter()
+        b = self.b
+        with b.localForm() as bl:
+            bl.set(0.0)
+        fpetsc.assemble_vector(b, self._F_forms)
+        b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        fpetsc.set_bc(b, self._bcs0_zero)
+        b.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+        self.timings["assemble_F"] += time.perf_counter() - t0
+
+    def _assemble_matrix(self) -> bool:
+        """Assemble J (and P); skipped for linear problems with an unchanged dt."""
+        from dolfinx.fem import petsc as fpetsc
+
+        key = float(self.dt.value)
+        if self.qp.linear and self._matrix_key == key:
+            return False
+        t0 = time.perf_counter()
+        self.A.zeroEntries()
+        fpetsc.assemble_matrix(self.A, self._J_forms, bcs=self._bcs, diag=1.0)
+        self.A.assemble()
+        if self.P is not None:
+            self.P.zeroEntries()
+            fpetsc.assemble_matrix(self.P, self._P_forms, bcs=self._bcs, diag=1.0)
+            self.P.assemble()
+        self.ksp.setOperators(self.A, self.P if self.P is not None else self.A)
+        self._matrix_key = key
+        if self._plate is not None:
+            self._plate["db"] = None
+        self.timings["assemble_J"] += time.perf_counter() - t0
+        return True
+
+    def _solve(self, rhs: Any, sol: Any) -> int:
+        t0 = time.perf_counter()
+        self.ksp.solve(rhs, sol)
+        its = check_reason(self.ksp, "Newton correction")
+        self.timings["solve"] += time.perf_counter() - t0
+        return its
+
+    def reaction(self, facet: str, component: int) -> float:
+        """Resultant (kN) of the unconstrained momentum residual on a facet group.
+
+        Sums the residual over the dofs of ``component`` on facet group ``facet`` at the current
+        state: the reaction of the constraint, ``int sigma_total . n`` over the facets (tension
+        positive).
+        """
+        from dolfinx import fem
+
+        fdim = self.mesh.topology.dim - 1
+        facets = self.md.facet_tags.find(self.md.facet_tag(facet))
+        dofs = fem.locate_dofs_topological(self.V.sub(component), fdim, facets)
+        owned = dofs[dofs < self.V.dofmap.index_map.size_local * 3]
+        return self._resultant(owned)
+
+    def _resultant(self, owned: np.ndarray) -> float:
+        from dolfinx import fem, la
+        from mpi4py import MPI
+
+        vec = fem.assemble_vector(self._F_u_form)
+        vec.scatter_reverse(la.InsertMode.add)
+        return float(self.comm.allreduce(float(vec.array[owned].sum()), op=MPI.SUM))
+
+    # ------------------------------------------------------------------ the step
+    def solve_step(self, dt: float, load_factor: float) -> StepInfo:
+        """Solve one backward-Euler step of size ``dt`` (day) at ``load_factor``.
+
+        Starts from the current fields (the committed ones unless a caller changed them).
+        Never raises on non-convergence: returns ``StepInfo(converged=False)`` and leaves the
+        trial state uncommitted; the caller calls :meth:`commit` or :meth:`rollback`.
+        """
+        from petsc4py import PETSc
+
+        t_start = time.perf_counter()
+        nw = self.options.newton
+        self._set_step_constants(dt, load_factor)
+        info = StepInfo(converged=False)
+        plate = self._plate
+        ref = self._R_run.copy()
+        ok_inc = False
+        self._apply_bc_values()
+        self._fields_to_x(self.x)
+        try:
+            for it in range(nw.max_it + 1):
+                self._evaluate_law()
+                if not self.qp.all_finite():
+                    raise ConvergenceError("NaN/inf stress from the constitutive law")
+                self._assemble_residual()
+                rn = self._block_norms(self.b)
+                if not np.all(np.isfinite(rn)):
+                    raise ConvergenceError("NaN residual")
+                g_plate = 0.0
+                if plate is not None:
+                    g_plate = self._resultant(plate["owned"]) - plate["spec"].force * load_factor
+                info.residuals.append((float(rn[0]), float(rn[1])))
+                if it == 0:
+                    ref = np.maximum(ref, rn)
+                    self._R_run = np.maximum(self._R_run, rn)
+                ok_res = np.all(rn <= nw.rtol * ref + nw.atol)
+                if plate is not None:
+                    fscale = max(abs(plate["spec"].force * load_factor), 1e-30)
+                    ok_res = ok_res and abs(g_plate) <= nw.rtol * fscale + nw.atol
+                if it >= 1 and (ok_res or ok_inc):
+                    info.converged = True
+                    break
+                if it == nw.max_it:
+                    info.message = f"no convergence in {nw.max_it} iterations; |r| = {rn}"
+                    break
+                self._assemble_matrix()
+                info.ksp_its += self._solve(self.b, self.dx_vec)
+                if plate is not None:
+                    self._border_plate(load_factor)
+                dxn = self._block_norms(self.dx_vec)
+                if not np.all(np.isfinite(dxn)):
+                    raise ConvergenceError("NaN Newton increment")
+                xn = self._block_norms(self.x)
+                self.x.axpy(-1.0, self.dx_vec)
+                self._x_to_fields(self.x)
+                ok_inc = bool(np.all(dxn <= nw.stol * np.maximum(xn, 1e-300)))
+                info.newton_its = it + 1
+        except ConvergenceError as exc:
+            info.converged = False
+            info.message = str(exc)
+        except PETSc.Error as exc:  # pragma: no cover - PETSc failures are reported, not hidden
+            info.converged = False
+            info.message = f"PETSc error {exc}"
+        info.seconds = time.perf_counter() - t_start
+        return info
+
+    def _border_plate(self, load_factor: float) -> None:
+        """Rigid-plate bordering: correct dx so that the plate resultant equals its force.
+
+        ``dx = dx_a + dU * dx_b`` where ``dx_a`` solves with the plate held, ``dx_b`` is the
+        response to a unit plate motion; ``dU`` from a secant on the plate resultant (exact
+        for linear problems).
+        """
+        from dolfinx.fem import petsc as fpetsc
+        from petsc4py import PETSc
+
+        plate = self._plate
+        pl = plate["spec"]
+        if plate["db"] is None:
+            rhs = self._tmp
+            with rhs.localForm() as rl:
+                rl.set(0.0)
+            unit_bcs = plate["unit_bcs"]
+            bcs1 = self._bcs_by_block_J(unit_bcs)
+            fpetsc.apply_lifting(rhs, self._J_forms, bcs=bcs1, alpha=1.0)
+            rhs.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+            from dolfinx import fem
+
+            fpetsc.set_bc(rhs, fem.bcs_by_block(fem.extract_function_spaces(self._F_forms),
+                                                unit_bcs))
+            db = self.dx_vec.duplicate()
+            db.setAttr("_blocks", self.dx_vec.getAttr("_blocks"))
+            self._solve(rhs, db)
+            plate["db"] = db
+        db = plate["db"]
+        x0 = self.x.copy()
+        xa = self.x.copy()
+        xa.axpy(-1.0, self.dx_vec)
+        self._x_to_fields(xa)
+        self._evaluate_law()
+        Ra = self._resultant(plate["owned"])
+        xb = xa.copy()
+        xb.axpy(-1.0, db)
+        self._x_to_fields(xb)
+        self._evaluate_law()
+        Rb = self._resultant(plate["owned"])
+        target = pl.force * load_factor
+        dU = -(Ra - target) / (Rb - Ra)
+        self.dx_vec.axpy(dU, db)
+        self.plate_U += dU
+        plate["U"].value = self.plate_U
+        self._x_to_fields(x0)
+
+    def _bcs_by_block_J(self, bcs: Any) -> Any:
+        from dolfinx import fem
+
+        return fem.bcs_by_block(fem.extract_function_spaces(self._J_forms, 1), bcs)
+
+    # ------------------------------------------------------------------ state management
+    def commit(self) -> None:
+        """Adopt the converged step: state committed, ``u_n, p_n`` updated."""
+        self.qp.commit()
+        for f, fn in zip(self.fields, self.fields_n, strict=True):
+            fn.x.array[:] = f.x.array
+        self._committed_U = self.plate_U
+
+    def rollback(self) -> None:
+        """Return to the last committed step (fields, plate and quadrature state)."""
+        self.qp.rollback()
+        for f, fn in zip(self.fields, self.fields_n, strict=True):
+            f.x.array[:] = fn.x.array
+        self.plate_U = getattr(self, "_committed_U", 0.0)
+        if self._plate is not None:
+            self._plate["U"].value = self.plate_U
+
+    def reset_displacements(self) -> None:
+        """Set u (current and committed) to zero, keeping the stress state (after geostatic)."""
+        for f in (self.u, self.u_n):
+            f.x.array[:] = 0.0
+        self.plate_U = 0.0
+        self._committed_U = 0.0
+
+    # ------------------------------------------------------------------ initial stress
+    def geostatic_stress(self) -> dict[str, np.ndarray]:
+        """K0 effective stress at the quadrature points of each group (Mandel, kPa).
+
+        ``sigma'_v(z) = -int_z^{z_top} (gamma_sat - GAMMA_W) dz`` over horizontal layers (the
+        groups' elevation ranges, all-reduced), ``sigma'_h = K0 sigma'_v``; ``z_top`` is the
+        highest soil elevation (water table at the ground surface).
+        """
+        from mpi4py import MPI
+
+        mesh = self.mesh
+        gx = mesh.geometry.x
+        cdm = mesh.geometry.dofmap
+        layers = []
+        for name, mat in self.materials.items():
+            cells = self.md.cell_tags.find(self.md.cell_tag(name))
+            z = gx[cdm[cells].reshape(-1), 2] if cells.size else np.array([np.inf])
+            zmin = self.comm.allreduce(float(z.min()), op=MPI.MIN)
+            z = gx[cdm[cells].reshape(-1), 2] if cells.size else np.array([-np.inf])
+            zmax = self.comm.allreduce(float(z.max()), op=MPI.MAX)
+            layers.append((zmin, zmax, mat.gamma_sat - GAMMA_W))
+        z_top = max(lay[1] for lay in layers)
+
+        def sigma_v(z: np.ndarray) -> np.ndarray:
+            s = np.zeros_like(z)
+            for zmin, zmax, g in layers:
+                top = np.minimum(zmax, z_top)
+                bot = np.maximum(zmin, z)
+                s -= g * np.clip(top - bot, 0.0, None)
+            return s
+
+        out = {}
+        for g in self.qp.groups:
+            sv = sigma_v(g.x[:, 2])
+            k0 = g.material.k0
+            s = np.zeros((g.n, 6))
+            s[:, 0] = s[:, 1] = k0 * sv
+            s[:, 2] = sv
+            out[g.name] = s
+        return out
+
+    def set_initial_stress(self, stress0: dict[str, np.ndarray | None]) -> None:
+        """Initialise every group's law state with ``stress0[name]`` ((n,6) Mandel kPa)."""
+        self.qp.initialise(stress0)
+
+    # ------------------------------------------------------------------ diagnostics
+    def max_displacement(self) -> float:
+        """Largest nodal displacement magnitude, m (all ranks)."""
+        from mpi4py import MPI
+
+        nloc = self.V.dofmap.index_map.size_local
+        a = self.u.x.array[: 3 * nloc].reshape(-1, 3)
+        loc = float(np.sqrt((a**2).sum(axis=1)).max()) if nloc else 0.0
+        return float(self.comm.allreduce(loc, op=MPI.MAX))

@@ -1,0 +1,274 @@
+"""Frozen inputs of the coupled solver (the scenario model maps onto these).
+
+Units: kN, m, day (stress kPa, permeability m/day, unit weight kN/m^3). Tension positive;
+``p`` is the excess pore pressure, compression of the water positive (design.md §4).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+from pilegroup.solver.errors import SolverInputError
+
+#: Unit weight of water, kN/m^3. Darcy's law is written ``q = -(k / GAMMA_W) grad p`` with the
+#: hydraulic conductivity ``k`` in m/day, so ``k / GAMMA_W`` is in m^2/(kPa day).
+GAMMA_W = 9.81
+#: Bulk modulus of pore water, kPa (2.2 GPa).
+K_WATER = 2.2e6
+
+
+def _positive(name: str, value: float, unit: str, allow_zero: bool = False) -> None:
+    ok = math.isfinite(value) and (value >= 0 if allow_zero else value > 0)
+    if not ok:
+        rel = ">= 0" if allow_zero else "> 0"
+        raise SolverInputError(f"{name} = {value!r} {unit}; allowed: finite and {rel}")
+
+
+@dataclass(frozen=True)
+class SoilMaterial:
+    """Saturated soil of one cell group.
+
+    Attributes:
+        law: a constitutive law of ``pilegroup.constitutive`` (Mandel notation, tension
+            positive; stress in kPa).
+        k_m_per_day: hydraulic conductivity k, m/day (Darcy: ``q = -(k/GAMMA_W) grad p``).
+        porosity: n = e0/(1+e0), -; the storage is ``S = n / K_w`` (1/kPa).
+        gamma_sat: saturated unit weight, kN/m^3; the buoyant weight ``gamma_sat - GAMMA_W``
+            loads the skeleton (geostatic stage).
+        K0: coefficient of earth pressure at rest; ``None`` gives ``1 - sin(phi)`` when the law
+            has ``phi_deg``, else ``nu/(1-nu)``.
+        K_w: bulk modulus of the pore water, kPa.
+    """
+
+    law: Any
+    k_m_per_day: float
+    porosity: float
+    gamma_sat: float = GAMMA_W
+    K0: float | None = None
+    K_w: float = K_WATER
+
+    def __post_init__(self) -> None:
+        _positive("k_m_per_day", self.k_m_per_day, "m/day", allow_zero=True)
+        if not (0.0 <= self.porosity < 1.0):
+            raise SolverInputError(f"porosity = {self.porosity!r} -; allowed: [0, 1)")
+        _positive("gamma_sat", self.gamma_sat, "kN/m^3", allow_zero=True)
+        _positive("K_w", self.K_w, "kPa")
+        if self.K0 is not None:
+            _positive("K0", self.K0, "-")
+        if not hasattr(self.law, "update") or not hasattr(self.law, "initial_state"):
+            raise SolverInputError(f"law = {self.law!r} does not follow the constitutive protocol")
+
+    @property
+    def storage(self) -> float:
+        """Storage coefficient S = n / K_w, 1/kPa."""
+        return self.porosity / self.K_w
+
+    @property
+    def mobility(self) -> float:
+        """Mobility k / GAMMA_W, m^2/(kPa day)."""
+        return self.k_m_per_day / GAMMA_W
+
+    @property
+    def k0(self) -> float:
+        """Coefficient of earth pressure at rest used by the geostatic stage, -."""
+        if self.K0 is not None:
+            return float(self.K0)
+        phi = getattr(self.law, "phi_deg", None)
+        if phi is not None:
+            return 1.0 - math.sin(math.radians(float(phi)))
+        nu = float(getattr(self.law, "nu", 0.0))
+        return nu / (1.0 - nu)
+
+    def elastic_moduli(self) -> tuple[float, float]:
+        """(bulk K, shear G) of the law's elastic part, kPa (used by preconditioners)."""
+        E = float(self.law.E)
+        nu = float(self.law.nu)
+        return E / (3.0 * (1.0 - 2.0 * nu)), E / (2.0 * (1.0 + nu))
+
+
+@dataclass(frozen=True)
+class Discretisation:
+    """Finite-element pair and quadrature.
+
+    Attributes:
+        pair: ``"Q2Q1"`` (Taylor–Hood on hexahedra, inf-sup stable) or ``"Q1Q1"`` (equal order,
+            with the pressure-projection stabilisation when ``stabilise``).
+        stabilise: add the Bochev–Dohrmann polynomial-pressure-projection term (Q1Q1 only).
+        stab_factor: multiplies the stabilisation parameter ``tau = 1/(2G)`` (White & Borja 2008).
+    """
+
+    pair: Literal["Q2Q1", "Q1Q1"] = "Q2Q1"
+    stabilise: bool = True
+    stab_factor: float = 1.0
+
+    def __post_init__(self) -> None:
+        if self.pair not in ("Q2Q1", "Q1Q1"):
+            raise SolverInputError(f"pair = {self.pair!r}; allowed: 'Q2Q1', 'Q1Q1'")
+        _positive("stab_factor", self.stab_factor, "-", allow_zero=True)
+
+    @property
+    def u_degree(self) -> int:
+        """Polynomial degree of the displacement space."""
+        return 2 if self.pair == "Q2Q1" else 1
+
+    @property
+    def quadrature_degree(self) -> int:
+        """Degree of the Gauss rule at whose points the soil state lives."""
+        return 2 * self.u_degree
+
+
+@dataclass(frozen=True)
+class NewtonOptions:
+    """Newton settings.
+
+    Attributes:
+        rtol: relative residual tolerance per block (u and p), against the largest first
+            residual seen so far in the run.
+        atol: absolute residual tolerance (kN for u, m^3 for p).
+        stol: relative increment tolerance (alternative acceptance when the residual has
+            reached round-off).
+        max_it: iteration limit; beyond it the step fails (and is cut back).
+    """
+
+    rtol: float = 1e-9
+    atol: float = 1e-12
+    stol: float = 1e-12
+    max_it: int = 15
+
+
+@dataclass(frozen=True)
+class SolverOptions:
+    """Linear solver: a named preset of PETSc options merged with overrides.
+
+    Attributes:
+        preset: ``"direct"`` (MUMPS LU) or ``"fieldsplit_gamg"`` (FGMRES + fixed-stress
+            block Gauss–Seidel, GAMG with rigid-body near-nullspace on u).
+        overrides: extra PETSc options (without prefix), applied after the preset.
+        prefix: PETSc options prefix of this problem.
+        newton: Newton settings.
+    """
+
+    preset: str = "direct"
+    overrides: Mapping[str, Any] = field(default_factory=dict)
+    prefix: str = "biot_"
+    newton: NewtonOptions = field(default_factory=NewtonOptions)
+
+
+@dataclass(frozen=True)
+class TimeStepping:
+    """Adaptive backward-Euler steps, days.
+
+    Attributes:
+        dt0: first step size, day.
+        dt_min: a cut-back below this raises :class:`StepFailure`, day.
+        dt_max: largest step, day.
+        grow: factor applied after a step that took at most ``easy_newton`` iterations.
+        cut: factor applied after a failed step (< 1).
+        easy_newton: Newton iterations counted as easy.
+        hold: number of consecutive easy steps at one size before it grows (a linear problem
+            then refactors its matrix only when the size changes).
+        milestones: extra times (day) hit exactly (output times); stage ends are always hit.
+    """
+
+    dt0: float = 1.0
+    dt_min: float = 1e-8
+    dt_max: float = math.inf
+    grow: float = 1.5
+    cut: float = 0.25
+    easy_newton: int = 4
+    hold: int = 1
+    milestones: tuple[float, ...] = ()
+
+    def __post_init__(self) -> None:
+        _positive("dt0", self.dt0, "day")
+        _positive("dt_min", self.dt_min, "day")
+        if not self.dt_max >= self.dt0:
+            raise SolverInputError(f"dt_max = {self.dt_max} day must be >= dt0 = {self.dt0}")
+        if not self.grow >= 1.0:
+            raise SolverInputError(f"grow = {self.grow}; allowed: >= 1")
+        if not 0.0 < self.cut < 1.0:
+            raise SolverInputError(f"cut = {self.cut}; allowed: (0, 1)")
+
+
+@dataclass(frozen=True)
+class DisplacementBC:
+    """Prescribed displacement of one component on a facet group.
+
+    ``value`` (m) is multiplied by the stage load factor when ``ramp`` is true.
+    """
+
+    facet: str
+    component: int
+    value: float = 0.0
+    ramp: bool = True
+
+
+@dataclass(frozen=True)
+class PressureBC:
+    """Prescribed excess pore pressure (kPa) on a facet group (drained boundary: 0).
+
+    ``facet=None`` fixes every pressure dof (a drained analysis through the same pipeline).
+    """
+
+    facet: str | None
+    value: float = 0.0
+
+
+@dataclass(frozen=True)
+class SurfaceLoad:
+    """Uniform normal pressure (kPa, positive = compressive, pushing into the body).
+
+    The load is ``load_factor * pressure`` when ``ramp`` is true, else constant.
+    """
+
+    facet: str
+    pressure: float
+    ramp: bool = True
+
+
+@dataclass(frozen=True)
+class RigidPlate:
+    """A rigid, frictionless plate on a facet group, under force control.
+
+    The ``component`` of displacement is one unknown U on the group, and the resultant of the
+    reactions there equals ``force`` (kN, along +``component``; negative pushes down when the
+    component is z), times the load factor. Solved by bordering inside Newton.
+    """
+
+    facet: str
+    component: int
+    force: float
+
+
+@dataclass(frozen=True)
+class Stage:
+    """One stage of the analysis.
+
+    Attributes:
+        name: label.
+        kind: ``"geostatic"`` (K0 stresses, equilibrium check, displacements reset),
+            ``"load"`` (load factor ramped linearly from its previous value to ``load_factor``
+            over ``duration``; ``duration = 0`` is one instantaneous, undrained step) or
+            ``"consolidation"`` (constant load to the stage end).
+        duration: day.
+        load_factor: load factor at the end of the stage (loads with ``ramp``).
+        dt0: first step of this stage (day); ``None`` keeps the stepper's current size.
+    """
+
+    name: str
+    kind: Literal["geostatic", "load", "consolidation"]
+    duration: float = 0.0
+    load_factor: float = 1.0
+    dt0: float | None = None
+
+    def __post_init__(self) -> None:
+        if self.kind not in ("geostatic", "load", "consolidation"):
+            raise SolverInputError(f"stage {self.name!r}: kind = {self.kind!r}")
+        _positive(f"stage {self.name!r} duration", self.duration, "day", allow_zero=True)
+
+
+#: Signature of an initial-stress provider: (points (n,3) m, material) -> (n,6) Mandel kPa.
+InitialStress = Callable[[Any, SoilMaterial], Any]

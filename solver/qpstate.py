@@ -1,0 +1,142 @@
+"""Constitutive state at quadrature points (the external-operator pattern, written directly).
+
+For each material group the owned cells, their quadrature points and the law's state arrays
+``(n_points, k)`` are kept here. ``evaluate`` computes the strain increment at the points from a
+compiled ``dolfinx.fem.Expression``, calls ``law.update`` and writes the stress (Mandel 6-vector,
+kPa, tension positive) and the tangent (6x6, kPa) into quadrature Functions that the residual and
+Jacobian forms read. ``commit`` adopts the trial state after a converged step; ``rollback`` keeps
+the committed one (the trial is simply discarded).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+
+@dataclass
+class MaterialPoints:
+    """Quadrature points of one material group (owned cells only)."""
+
+    name: str
+    material: Any
+    cells: np.ndarray
+    dofs: np.ndarray  # (n_cells * nqp,) block indices into the quadrature spaces
+    x: np.ndarray  # (n_points, 3) coordinates, m
+    state_n: dict[str, np.ndarray] = field(default_factory=dict)
+    state_trial: dict[str, np.ndarray] | None = None
+
+    @property
+    def n(self) -> int:
+        """Number of points."""
+        return int(self.dofs.size)
+
+
+class QuadratureState:
+    """Stress and tangent quadrature Functions driven by the constitutive laws.
+
+    Args:
+        mesh: the mesh.
+        groups: ``name -> (material, cells)`` with owned cell indices per material group.
+        degree: quadrature degree (must match the forms' ``quadrature_degree``).
+        strain_increment: UFL expression of the Mandel strain increment (6-vector).
+    """
+
+    def __init__(self, mesh: Any, groups: dict[str, tuple[Any, np.ndarray]], degree: int,
+                 strain_increment: Any) -> None:
+        import basix
+        import basix.ufl
+        import ufl
+        from dolfinx import fem
+
+        self.mesh = mesh
+        cell = mesh.basix_cell()
+        self.points, self.weights = basix.make_quadrature(cell, degree)
+        self.nqp = self.points.shape[0]
+        Se = basix.ufl.quadrature_element(cell, value_shape=(6,), degree=degree)
+        Te = basix.ufl.quadrature_element(cell, value_shape=(6, 6), degree=degree)
+        self.S = fem.functionspace(mesh, Se)
+        self.T = fem.functionspace(mesh, Te)
+        self.stress = fem.Function(self.S, name="effective_stress_qp")
+        self.tangent = fem.Function(self.T, name="tangent_qp")
+        assert self.S.dofmap.bs == 6 and self.T.dofmap.bs == 36
+        self.expr_strain = fem.Expression(strain_increment, self.points)
+        self.expr_x = fem.Expression(ufl.SpatialCoordinate(mesh), self.points)
+        self.groups: list[MaterialPoints] = []
+        dm = self.S.dofmap.list
+        for name, (mat, cells) in groups.items():
+            cells = np.asarray(cells, dtype=np.int32)
+            dofs = dm[cells].reshape(-1) if cells.size else np.zeros(0, dtype=np.int32)
+            if cells.size:
+                x = self.expr_x.eval(mesh, cells).reshape(-1, 3)
+            else:
+                x = np.zeros((0, 3))
+            self.groups.append(MaterialPoints(name, mat, cells, dofs, x))
+        self.linear = all(_is_linear(g.material.law) for g in self.groups)
+
+    def initialise(self, stress0: dict[str, np.ndarray | None]) -> None:
+        """Set the committed state of each group from ``stress0[name]`` ((n,6) kPa or None)."""
+        for g in self.groups:
+            g.state_n = g.material.law.initial_state(g.n, stress0.get(g.name))
+            g.state_trial = None
+            self._write(g, g.state_n["stress"], None)
+        self.stress.x.scatter_forward()
+
+    def evaluate(self, dt: float) -> None:
+        """Evaluate the laws at the current strain increment; fill stress and tangent."""
+        for g in self.groups:
+            if g.n == 0:
+                g.state_trial = {k: v.copy() for k, v in g.state_n.items()}
+                continue
+            de = self.expr_strain.eval(self.mesh, g.cells).reshape(-1, 6)
+            stress, trial, tangent = g.material.law.update(de, g.state_n, dt)
+            g.state_trial = trial
+            self._write(g, stress, tangent)
+
+    def _write(self, g: MaterialPoints, stress: np.ndarray, tangent: np.ndarray | None) -> None:
+        if g.n == 0:
+            return
+        s = self.stress.x.array.reshape(-1, 6)
+        s[g.dofs] = stress
+        if tangent is not None:
+            t = self.tangent.x.array.reshape(-1, 36)
+            t[g.dofs] = np.asarray(tangent).reshape(-1, 36)
+
+    def all_finite(self) -> bool:
+        """True when every trial stress is finite (local check)."""
+        return bool(np.all(np.isfinite(self.stress.x.array)))
+
+    def commit(self) -> None:
+        """Adopt the trial state of every group."""
+        for g in self.groups:
+            if g.state_trial is not None:
+                g.state_n = {k: np.array(v, copy=True) for k, v in g.state_trial.items()}
+            g.state_trial = None
+
+    def rollback(self) -> None:
+        """Discard the trial state; the stress Function is reset to the committed stress."""
+        for g in self.groups:
+            g.state_trial = None
+            self._write(g, g.state_n["stress"], None)
+
+    def cell_average(self, key: str) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+        """Cell averages of state ``key`` per group: ``name -> (cells, (n_cells, k))``."""
+        out = {}
+        w = self.weights / self.weights.sum()
+        for g in self.groups:
+            if key not in g.state_n:
+                continue
+            a = g.state_n[key]
+            k = a.shape[1]
+            out[g.name] = (g.cells, np.einsum("cqk,q->ck", a.reshape(-1, self.nqp, k), w))
+        return out
+
+
+def _is_linear(law: Any) -> bool:
+    """A law is linear when it declares ``linear = True`` or is the LinearElastic law."""
+    flag = getattr(law, "linear", None)
+    if flag is not None:
+        return bool(flag)
+    return type(law).__name__ == "LinearElastic"

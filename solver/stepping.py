@@ -1,0 +1,196 @@
+"""Adaptive backward-Euler time stepping and the staged analysis.
+
+The stepper grows the step after easy Newton convergence, cuts it back and retries (with the
+quadrature state and fields rolled back) after a failure or NaN, never accepts a non-converged
+step, and lands exactly on milestone times (stage ends, output times).
+
+Stages (design.md §4):
+
+* ``geostatic``: the law states get the K0 effective stress (``SoilMaterial.k0``), the water is
+  hydrostatic (excess pressure 0); one undrained step under the buoyant weight checks the
+  equilibrium (largest displacement below ``geostatic_tol`` m, else :class:`SolverError`); then
+  displacements are reset to zero, keeping the stresses.
+* ``load``: load factor ramped linearly to the stage's value; ``duration = 0`` is one
+  instantaneous undrained step.
+* ``consolidation``: constant load to the stage end.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+from pilegroup.solver.errors import SolverError, StepFailure
+from pilegroup.solver.inputs import Stage, TimeStepping
+
+
+@dataclass
+class StepRecord:
+    """One accepted step."""
+
+    stage: str
+    t: float
+    dt: float
+    load_factor: float
+    newton_its: int
+    ksp_its: int
+    seconds: float
+
+
+@dataclass
+class RunLog:
+    """Everything the stepper did: accepted steps and rejected attempts."""
+
+    steps: list[StepRecord] = field(default_factory=list)
+    rejected: int = 0
+    geostatic_max_u: float | None = None
+    wall_s: float = 0.0
+
+    @property
+    def newton_total(self) -> int:
+        """Newton iterations of the accepted steps."""
+        return sum(s.newton_its for s in self.steps)
+
+
+Callback = Callable[[Any, float, str], None]
+
+
+class AdaptiveStepper:
+    """Adaptive stepper over a problem with ``solve_step/commit/rollback``.
+
+    Args:
+        ts: step-size rules.
+        log: run log to append to.
+    """
+
+    def __init__(self, ts: TimeStepping, log: RunLog | None = None) -> None:
+        self.ts = ts
+        self.dt = ts.dt0
+        self.log = log or RunLog()
+        self._easy = 0
+
+    def advance(
+        self,
+        problem: Any,
+        t0: float,
+        t1: float,
+        load_factor: Callable[[float], float],
+        stage: str = "",
+        milestones: Sequence[float] = (),
+        on_milestone: Callback | None = None,
+    ) -> float:
+        """Advance from ``t0`` to ``t1`` (day); returns ``t1``.
+
+        ``load_factor(t)`` gives the load factor at time ``t``; ``on_milestone(problem, t,
+        stage)`` is called after the accepted step that lands on each milestone in
+        ``(t0, t1]`` (``t1`` included).
+        """
+        ts = self.ts
+        marks = sorted({float(m) for m in (*milestones, *ts.milestones) if t0 < m < t1} | {t1})
+        t = t0
+        for m in marks:
+            while t < m:
+                dt = min(self.dt, ts.dt_max)
+                landing = t + dt * (1.0 + 1e-9) >= m or (m - t - dt) < 1e-3 * dt
+                if landing:
+                    dt = m - t
+                t_new = m if landing else t + dt
+                info = problem.solve_step(dt, load_factor(t_new))
+                if not info.converged:
+                    problem.rollback()
+                    self.log.rejected += 1
+                    self.dt = dt * ts.cut
+                    self._easy = 0
+                    if self.dt < ts.dt_min:
+                        raise StepFailure(
+                            f"stage {stage!r}: step at t = {t:.6g} day failed with dt = "
+                            f"{dt:.3g} day (< dt_min after cut): {info.message}")
+                    continue
+                problem.commit()
+                self.log.steps.append(StepRecord(stage, t_new, dt, load_factor(t_new),
+                                                 info.newton_its, info.ksp_its, info.seconds))
+                t = t_new
+                if landing:
+                    continue
+                self.dt = dt
+                if info.newton_its <= ts.easy_newton:
+                    self._easy += 1
+                    if self._easy >= ts.hold:
+                        self.dt = min(dt * ts.grow, ts.dt_max)
+                        self._easy = 0
+                else:
+                    self._easy = 0
+            if on_milestone is not None:
+                on_milestone(problem, t, stage)
+        return t
+
+
+def run_stages(
+    problem: Any,
+    stages: Sequence[Stage],
+    ts: TimeStepping,
+    on_milestone: Callback | None = None,
+    geostatic_tol: float = 1e-6,
+) -> RunLog:
+    """Run the stages in order; returns the :class:`RunLog`.
+
+    Args:
+        problem: a :class:`~pilegroup.solver.biot.BiotProblem`.
+        stages: the stages.
+        ts: time-stepping rules (milestones in absolute time, day).
+        on_milestone: called at stage ends and milestone times (e.g. an output writer).
+        geostatic_tol: largest displacement (m) accepted by the geostatic equilibrium check.
+    """
+    log = RunLog()
+    stepper = AdaptiveStepper(ts, log)
+    t = 0.0
+    lam = 0.0
+    t_wall = time.perf_counter()
+    for st in stages:
+        if st.kind == "geostatic":
+            problem.set_initial_stress(problem.geostatic_stress())
+            info = problem.solve_step(0.0, lam)
+            if not info.converged:
+                raise SolverError(f"geostatic stage {st.name!r} did not converge: "
+                                  f"{info.message}")
+            problem.commit()
+            umax = problem.max_displacement()
+            log.geostatic_max_u = umax
+            if umax > geostatic_tol:
+                raise SolverError(
+                    f"geostatic stage {st.name!r}: max |u| = {umax:.3e} m > {geostatic_tol} m; "
+                    "the initial stress is not in equilibrium with the buoyant weight")
+            problem.reset_displacements()
+            log.steps.append(StepRecord(st.name, t, 0.0, lam, info.newton_its, info.ksp_its,
+                                        info.seconds))
+            if on_milestone is not None:
+                on_milestone(problem, t, st.name)
+            continue
+        lam0, lam1, t0, t1 = lam, st.load_factor if st.kind == "load" else lam, t, t + st.duration
+        if st.kind == "load" and st.duration == 0.0:
+            info = problem.solve_step(0.0, lam1)
+            if not info.converged:
+                problem.rollback()
+                raise StepFailure(f"instantaneous load stage {st.name!r} failed: {info.message}")
+            problem.commit()
+            log.steps.append(StepRecord(st.name, t, 0.0, lam1, info.newton_its, info.ksp_its,
+                                        info.seconds))
+            lam = lam1
+            if on_milestone is not None:
+                on_milestone(problem, t, st.name)
+            continue
+        if st.dt0 is not None:
+            stepper.dt = st.dt0
+
+        def lam_of(tt: float, lam0: float = lam0, lam1: float = lam1, t0: float = t0,
+                   t1: float = t1) -> float:
+            if t1 <= t0:
+                return lam1
+            return lam0 + (lam1 - lam0) * min(max((tt - t0) / (t1 - t0), 0.0), 1.0)
+
+        t = stepper.advance(problem, t0, t1, lam_of, st.name, on_milestone=on_milestone)
+        lam = lam1
+    log.wall_s = time.perf_counter() - t_wall
+    return log

@@ -1,0 +1,292 @@
+"""Verification cases: the real pipeline against closed-form solutions.
+
+Each case meshes a column or block with :func:`pilegroup.geometry.box.build_box`, runs
+:class:`pilegroup.solver.biot.BiotProblem` through :func:`pilegroup.solver.stepping.run_stages`
+and returns a :class:`CaseResult` with its error, the tolerance and the source of the reference.
+Run ``python -m pilegroup.studies.verification [CASE ...] [--size fast|bench] [--json]``
+(also under ``mpirun -n 2``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json as _json
+import math
+import sys
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import asdict, dataclass, field
+from typing import Any
+
+import numpy as np
+
+import pilegroup  # noqa: F401  (dolfinx_solver before dolfinx)
+
+__all__ = ["CASES", "CaseResult", "run_cases", "terzaghi",
+           "terzaghi_series", "mandel_centre_pressure", "main"]
+
+
+@dataclass
+class CaseResult:
+    """Outcome of one verification case (``error`` and ``tolerance`` are relative)."""
+
+    case: str
+    error: float
+    tolerance: float
+    passed: bool
+    wall_s: float
+    dofs: int
+    newton_its: int = 0
+    steps: int = 0
+    reference: str = ""
+    details: dict[str, Any] = field(default_factory=dict)
+
+    def line(self) -> str:
+        """One human-readable line."""
+        flag = "PASS" if self.passed else "FAIL"
+        return (f"{self.case:<10} {flag}  error {self.error:.3e}  tol {self.tolerance:.1e}  "
+                f"dofs {self.dofs}  steps {self.steps}  newton {self.newton_its}  "
+                f"wall {self.wall_s:.2f} s")
+
+
+# ---------------------------------------------------------------------------- closed forms
+def terzaghi_series(depth: np.ndarray, H: float, T: float, p0: float,
+                    n_terms: int = 400) -> np.ndarray:
+    """Terzaghi's excess pressure (kPa) at ``depth`` (m below the drained top).
+
+    The layer has thickness ``H`` and is drained at the top only; ``T = c_v t / H^2``.
+    ``p = sum_m 2 p0 / M sin(M depth / H) exp(-M^2 T)``, ``M = pi (2m + 1)/2`` (Terzaghi 1925;
+    Verruijt, *Theory and Problems of Poroelasticity*, 2016, ch. 2).
+    """
+    d = np.asarray(depth, dtype=float) / H
+    m = np.arange(n_terms)
+    M = np.pi * (2 * m + 1) / 2.0
+    c = 2.0 * p0 / M * np.exp(-(M**2) * T)
+    keep = np.abs(c) > 1e-16 * p0
+    return np.sin(np.outer(d, M[keep])) @ c[keep]
+
+
+def terzaghi_degree(T: float, n_terms: int = 400) -> float:
+    """Average degree of consolidation ``U(T) = 1 - sum 2/M^2 exp(-M^2 T)``."""
+    m = np.arange(n_terms)
+    M = np.pi * (2 * m + 1) / 2.0
+    return float(1.0 - np.sum(2.0 / M**2 * np.exp(-(M**2) * T)))
+
+
+def mandel_roots(C: float, n: int) -> np.ndarray:
+    """First ``n`` positive roots of ``tan(a) = C a`` (``C > 1``), by bisection."""
+    roots = []
+    for i in range(n):
+        lo = (i - 0.5) * np.pi + 1e-12 if i > 0 else 1e-9
+        hi = (i + 0.5) * np.pi - 1e-12
+
+        def f(a: float) -> float:
+            return math.sin(a) - C * a * math.cos(a)
+
+        flo = f(lo)
+        for _ in range(200):
+            mid = 0.5 * (lo + hi)
+            fm = f(mid)
+            if (fm > 0) == (flo > 0):
+                lo, flo = mid, fm
+            else:
+                hi = mid
+        roots.append(0.5 * (lo + hi))
+    return np.array(roots)
+
+
+def mandel_centre_pressure(t: np.ndarray, F: float, a: float, B: float, nu: float,
+                           nu_u: float, c: float, n_terms: int = 200) -> np.ndarray:
+    """Mandel's pore pressure (kPa) at the centre ``x = 0`` of a specimen of half-width ``a``.
+
+    Formula: ``p(x,t) = 2 F B (1+nu_u) / (3a) sum_i sin(a_i)/(a_i - sin a_i cos a_i)
+    (cos(a_i x/a) - cos a_i) exp(-a_i^2 c t / a^2)`` with ``tan a_i = (1-nu)/(nu_u-nu) a_i``;
+    ``2F`` is the force per unit length on the plate of width ``2a`` (Abousleiman, Cheng,
+    Cui, Detournay & Roegiers, Géotechnique 46(2), 1996, Eq. 21; Cheng & Detournay, Int. J.
+    Numer. Anal. Methods Geomech. 12, 1988). At ``t = 0+`` the pressure is uniform,
+    ``F B (1+nu_u)/(3a)``.
+    """
+    al = mandel_roots((1.0 - nu) / (nu_u - nu), n_terms)
+    coef = np.sin(al) / (al - np.sin(al) * np.cos(al)) * (1.0 - np.cos(al))
+    tt = np.atleast_1d(np.asarray(t, dtype=float))
+    return 2.0 * F * B * (1.0 + nu_u) / (3.0 * a) * (
+        np.exp(-np.outer(tt, al**2) * c / a**2) @ coef)
+
+
+# ---------------------------------------------------------------------------- helpers
+def _comm() -> Any:
+    from mpi4py import MPI
+
+    return MPI.COMM_WORLD
+
+
+def _p_along(problem: Any, z: np.ndarray, x: float, y: float) -> np.ndarray:
+    """Pressure at points ``(x, y, z)`` gathered on every rank (kPa)."""
+    return _eval_points(problem.p, np.column_stack([np.full_like(z, x), np.full_like(z, y), z]))
+
+
+def _eval_points(f: Any, pts: np.ndarray) -> np.ndarray:
+    from dolfinx import geometry
+    from mpi4py import MPI
+
+    mesh = f.function_space.mesh
+    comm = mesh.comm
+    tree = geometry.bb_tree(mesh, mesh.topology.dim)
+    cand = geometry.compute_collisions_points(tree, pts)
+    coll = geometry.compute_colliding_cells(mesh, cand, pts)
+    nloc = mesh.topology.index_map(mesh.topology.dim).size_local
+    bs = f.function_space.dofmap.bs
+    vals = np.zeros((pts.shape[0], bs))
+    found = np.zeros(pts.shape[0])
+    for i in range(pts.shape[0]):
+        cells = coll.links(i)
+        cells = cells[cells < nloc]
+        if cells.size:
+            vals[i] = f.eval(pts[i], cells[:1])
+            found[i] = 1.0
+    vals = comm.allreduce(vals, op=MPI.SUM)
+    found = comm.allreduce(found, op=MPI.SUM)
+    return (vals / np.maximum(found, 1.0)[:, None]).squeeze()
+
+
+# ---------------------------------------------------------------------------- Terzaghi
+def terzaghi(size: str = "fast", pair: str = "Q2Q1", nz: int | None = None,
+             steps_per_decade: int | None = None, dT_max: float | None = None,
+             preset: str = "direct", comm: Any = None) -> CaseResult:
+    """1D consolidation of a column drained at the top (Terzaghi 1925).
+
+    Column 1 x 1 x 10 m, E = 10 MPa, nu = 0.3, k = 1e-3 m/day, n = 0.4; 100 kPa applied
+    instantaneously on the top (one undrained step), then consolidation; sides on rollers,
+    bottom fixed and impermeable, top drained. The reference is the series solution with
+    water compressibility: ``p0 = q/(1 + m S)``, ``c_v = (k/gamma_w)/(S + 1/m)``
+    (``m`` oedometric modulus), settlement ``s = (q H - H p0 (1 - U))/m``.
+
+    Error: the largest, over T_v = 0.05, 0.2, 0.5, 1.0, of the relative L2 error of p over
+    depth (against the exact profile's L2 norm at that time) and the relative settlement
+    error. Tolerance 1 % (issue 5).
+    """
+    from pilegroup.constitutive.soil import LinearElastic
+    from pilegroup.geometry.box import build_box, graded_levels
+    from pilegroup.solver import (
+        GAMMA_W,
+        BiotProblem,
+        Discretisation,
+        DisplacementBC,
+        PressureBC,
+        SoilMaterial,
+        SolverOptions,
+        Stage,
+        SurfaceLoad,
+        TimeStepping,
+        run_stages,
+    )
+
+    comm = comm or _comm()
+    t0 = time.perf_counter()
+    H, E, nu, k, n, q = 10.0, 1.0e4, 0.3, 1.0e-3, 0.4, 100.0
+    nz = nz or {"fast": 16, "bench": 32}[size]
+    spd = steps_per_decade or {"fast": 16, "bench": 32}[size]
+    dT_max = dT_max or {"fast": 2e-3, "bench": 1e-3}[size]
+    md = build_box(comm, (0.0, 1.0), (0.0, 1.0), graded_levels(-H, 0.0, nz, ratio=4.0), 1, 1)
+    mat = SoilMaterial(LinearElastic(E, nu), k_m_per_day=k, porosity=n)
+    m_oed = E * (1 - nu) / ((1 + nu) * (1 - 2 * nu))
+    S = mat.storage
+    p0 = q / (1.0 + m_oed * S)
+    cv = (k / GAMMA_W) / (S + 1.0 / m_oed)
+    Ts = [0.05, 0.2, 0.5, 1.0]
+    times = [T * H**2 / cv for T in Ts]
+    problem = BiotProblem(
+        md, {"soil_layer_01": mat}, Discretisation(pair=pair),
+        displacement_bcs=[DisplacementBC("side_xmin", 0), DisplacementBC("side_xmax", 0),
+                          DisplacementBC("side_ymin", 1), DisplacementBC("side_ymax", 1),
+                          DisplacementBC("bottom", 2)],
+        pressure_bcs=[PressureBC("ground_surface")],
+        loads=[SurfaceLoad("ground_surface", q)],
+        options=SolverOptions(preset=preset, prefix=f"terz_{pair}_"),
+        self_weight=False,
+    )
+    t_end = times[-1]
+    dt0 = 1e-4 * t_end
+    grow = 10.0 ** (1.0 / spd)
+    ts = TimeStepping(dt0=dt0, dt_min=1e-12, dt_max=dT_max * t_end, grow=grow, hold=1,
+                      milestones=tuple(times[:-1]))
+    zq = np.linspace(-H, 0.0, 201)
+    rows: list[dict[str, float]] = []
+
+    def record(pb: Any, t: float, stage: str) -> None:
+        for T, tm in zip(Ts, times, strict=True):
+            if abs(t - tm) <= 1e-9 * tm:
+                ph = _p_along(pb, zq, 0.5, 0.5)
+                pe = terzaghi_series(-zq, H, T, p0)
+                e_p = float(np.sqrt(np.trapezoid((ph - pe) ** 2, zq) / np.trapezoid(pe**2, zq)))
+                uz = _eval_points(pb.u, np.array([[0.5, 0.5, 0.0]]))
+                s_h = -float(np.atleast_1d(uz)[2])
+                s_e = (q * H - H * p0 * (1.0 - terzaghi_degree(T))) / m_oed
+                rows.append({"T_v": T, "t_day": t, "err_p": e_p, "settlement_m": s_h,
+                             "settlement_ref_m": s_e, "err_s": abs(s_h - s_e) / s_e})
+
+    log = run_stages(problem, [Stage("load", "load", 0.0, 1.0),
+                               Stage("consolidation", "consolidation", t_end)], ts,
+                     on_milestone=record)
+    err = max(max(r["err_p"], r["err_s"]) for r in rows) if len(rows) == len(Ts) else math.inf
+    tol = 0.01
+    return CaseResult(
+        "terzaghi", err, tol, bool(err <= tol), time.perf_counter() - t0, problem.num_dofs,
+        log.newton_total, len(log.steps),
+        reference="Terzaghi (1925) series; Verruijt (2016) ch. 2",
+        details={"pair": pair, "nz": nz, "steps_per_decade": spd, "dT_max": dT_max,
+                 "rows": rows,
+                 "c_v_m2_per_day": cv, "p0_kPa": p0, "ranks": comm.size,
+                 "timings": problem.timings})
+
+
+CASES: dict[str, Callable[..., CaseResult]] = {
+    "terzaghi": terzaghi,
+}
+
+
+def run_cases(names: Sequence[str] | None = None, size: str = "fast",
+              json: bool = False, out: Any = None) -> list[CaseResult]:
+    """Run the named cases (all when empty); print one line each, or one JSON object each.
+
+    Only rank 0 prints. Returns the results (on every rank).
+    """
+    comm = _comm()
+    out = out or sys.stdout
+    names = list(names or CASES)
+    unknown = [n for n in names if n not in CASES]
+    if unknown:
+        raise KeyError(f"unknown verification case(s) {unknown}; known: {sorted(CASES)}")
+    results = []
+    for name in names:
+        res = CASES[name](size=size)
+        results.append(res)
+        if comm.rank == 0:
+            if json:
+                print(_json.dumps(asdict(res), default=_jsonable), file=out, flush=True)
+            else:
+                print(res.line(), file=out, flush=True)
+    return results
+
+
+def _jsonable(o: Any) -> Any:
+    if isinstance(o, np.generic):
+        return o.item()
+    if isinstance(o, np.ndarray):
+        return o.tolist()
+    return str(o)
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Command line: ``python -m pilegroup.studies.verification [CASE ...] [--json]``."""
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("cases", nargs="*")
+    ap.add_argument("--size", default="fast", choices=["fast", "bench"])
+    ap.add_argument("--json", action="store_true")
+    a = ap.parse_args(argv)
+    res = run_cases(a.cases, size=a.size, json=a.json)
+    return 0 if all(r.passed for r in res) else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
