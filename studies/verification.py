@@ -22,7 +22,7 @@ import numpy as np
 
 import pilegroup  # noqa: F401  (dolfinx_solver before dolfinx)
 
-__all__ = ["CASES", "CaseResult", "run_cases", "terzaghi",
+__all__ = ["CASES", "CaseResult", "run_cases", "terzaghi", "mandel",
            "terzaghi_series", "mandel_centre_pressure", "main"]
 
 
@@ -240,8 +240,112 @@ def terzaghi(size: str = "fast", pair: str = "Q2Q1", nz: int | None = None,
                  "timings": problem.timings})
 
 
+# ---------------------------------------------------------------------------- Mandel
+def mandel(size: str = "fast", pair: str = "Q2Q1", n: int | None = None,
+           steps_per_decade: int | None = None, dT_max: float | None = None,
+           preset: str = "direct", comm: Any = None) -> CaseResult:
+    """Mandel's problem (Mandel 1953): the Mandel–Cryer rise of the centre pressure.
+
+    Plane strain as a one-cell-thick 3D slab (``u_y = 0`` on both faces), quarter domain by
+    symmetry: ``x in [0, a]``, ``z in [0, b]``, ``a = b = 1 m``, rollers on ``x = 0`` and
+    ``z = 0``, drained and traction-free at ``x = a``, impermeable elsewhere; a rigid frictionless
+    plate on ``z = b`` carries ``F = 100 kN`` per metre of thickness (a :class:`RigidPlate`,
+    force control), applied instantaneously (one undrained step), then held.
+    E = 10 MPa, nu = 0.25, k = 1e-3 m/day, n = 0.3, water compressibility included
+    (Skempton B < 1).
+
+    Reference: Abousleiman, Cheng, Cui, Detournay & Roegiers (1996), Géotechnique 46(2),
+    187–195, Eq. 21 (Cheng & Detournay 1988) — see :func:`mandel_centre_pressure`. Error: the
+    largest, over the output times ``c t / a^2`` in (0.001 ... 1), of ``|p_h(0) - p(0)| / p0``
+    at the centre, ``p0 = F B (1 + nu_u) / (3 a)``. Tolerance 2 % (issue 5). The details also
+    report the peak ``max p(0,t)/p0`` of both (Mandel–Cryer: > 1).
+    """
+    from pilegroup.constitutive.soil import LinearElastic
+    from pilegroup.geometry.box import build_box
+    from pilegroup.solver import (
+        GAMMA_W,
+        BiotProblem,
+        Discretisation,
+        DisplacementBC,
+        PressureBC,
+        RigidPlate,
+        SoilMaterial,
+        SolverOptions,
+        Stage,
+        TimeStepping,
+        run_stages,
+    )
+
+    comm = comm or _comm()
+    t0 = time.perf_counter()
+    a = b = 1.0
+    thick = 0.1
+    E, nu, k, por, F = 1.0e4, 0.25, 1.0e-3, 0.3, 100.0
+    n = n or {"fast": 8, "bench": 16}[size]
+    spd = steps_per_decade or {"fast": 8, "bench": 16}[size]
+    dT_max = dT_max or {"fast": 0.02, "bench": 0.01}[size]
+    md = build_box(comm, (0.0, a), (0.0, thick), np.linspace(0.0, b, n + 1), n, 1)
+    mat = SoilMaterial(LinearElastic(E, nu), k_m_per_day=k, porosity=por)
+    K = E / (3 * (1 - 2 * nu))
+    G = E / (2 * (1 + nu))
+    Mb = 1.0 / mat.storage
+    Ku = K + Mb
+    B = Mb / Ku
+    nu_u = (3 * Ku - 2 * G) / (2 * (3 * Ku + G))
+    kappa = k / GAMMA_W
+    c = 2 * kappa * B**2 * G * (1 - nu) * (1 + nu_u) ** 2 / (9 * (1 - nu_u) * (nu_u - nu))
+    p0 = F * B * (1 + nu_u) / (3 * a)
+    Tstar = [0.001, 0.003, 0.01, 0.03, 0.05, 0.1, 0.2, 0.3, 0.5, 0.7, 1.0]
+    times = [T * a**2 / c for T in Tstar]
+    problem = BiotProblem(
+        md, {"soil_layer_01": mat}, Discretisation(pair=pair),
+        displacement_bcs=[DisplacementBC("side_xmin", 0), DisplacementBC("bottom", 2),
+                          DisplacementBC("side_ymin", 1), DisplacementBC("side_ymax", 1)],
+        pressure_bcs=[PressureBC("side_xmax")],
+        plates=[RigidPlate("ground_surface", 2, -F * thick)],
+        options=SolverOptions(preset=preset, prefix=f"mandel_{pair}_"),
+        self_weight=False,
+    )
+    t_end = times[-1]
+    ts = TimeStepping(dt0=1e-5 * t_end, dt_min=1e-14, dt_max=dT_max * t_end,
+                      grow=10.0 ** (1.0 / spd), milestones=tuple(times[:-1]))
+    centre = np.array([[0.0, 0.5 * thick, 0.5 * b]])
+    rows: list[dict[str, float]] = []
+
+    def record(pb: Any, t: float, stage: str) -> None:
+        ph = float(np.atleast_1d(_eval_points(pb.p, centre))[0])
+        if stage == "load":
+            rows.append({"t_star": 0.0, "t_day": 0.0, "p_h": ph, "p_ref": p0,
+                         "err": abs(ph - p0) / p0})
+            return
+        for T, tm in zip(Tstar, times, strict=True):
+            if abs(t - tm) <= 1e-9 * tm:
+                pe = float(mandel_centre_pressure(np.array([tm]), F, a, B, nu, nu_u, c)[0])
+                rows.append({"t_star": T, "t_day": t, "p_h": ph, "p_ref": pe,
+                             "err": abs(ph - pe) / p0})
+
+    log = run_stages(problem, [Stage("load", "load", 0.0, 1.0),
+                               Stage("consolidation", "consolidation", t_end)], ts,
+                     on_milestone=record)
+    ok_rows = len(rows) == len(Tstar) + 1
+    err = max(r["err"] for r in rows) if ok_rows else math.inf
+    peak_h = max(r["p_h"] for r in rows) / p0
+    peak_e = max(r["p_ref"] for r in rows) / p0
+    tol = 0.02
+    passed = bool(err <= tol and peak_h > 1.0)
+    return CaseResult(
+        "mandel", err, tol, passed, time.perf_counter() - t0, problem.num_dofs,
+        log.newton_total, len(log.steps),
+        reference="Abousleiman et al. (1996) Geotechnique 46(2) Eq. 21; Cheng & Detournay (1988)",
+        details={"pair": pair, "n": n, "steps_per_decade": spd, "dT_max": dT_max, "rows": rows,
+                 "peak_ratio_fe": peak_h, "peak_ratio_ref": peak_e, "B": B, "nu_u": nu_u,
+                 "c_m2_per_day": c, "p0_kPa": p0, "ranks": comm.size,
+                 "timings": problem.timings})
+
+
 CASES: dict[str, Callable[..., CaseResult]] = {
     "terzaghi": terzaghi,
+    "mandel": mandel,
 }
 
 
