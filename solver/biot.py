@@ -222,6 +222,7 @@ class BiotProblem:
         # --- boundary conditions
         self._bcs = []
         self._bcs_zero = []
+        self._drain_bcs: set[int] = set()
         self._u_bc_consts: list[tuple[DisplacementBC, Any]] = []
         for bc in self.displacement_bcs:
             if bc.component not in (0, 1, 2):
@@ -240,8 +241,12 @@ class BiotProblem:
             else:
                 facets = md.facet_tags.find(md.facet_tag(pbc.facet))
                 dofs = fem.locate_dofs_topological(Q, fdim, facets)
-            self._bcs.append(fem.dirichletbc(default_scalar_type(pbc.value), dofs, Q))
-            self._bcs_zero.append(fem.dirichletbc(default_scalar_type(0.0), dofs, Q))
+            bc = fem.dirichletbc(default_scalar_type(pbc.value), dofs, Q)
+            bc0 = fem.dirichletbc(default_scalar_type(0.0), dofs, Q)
+            self._bcs.append(bc)
+            self._bcs_zero.append(bc0)
+            if pbc.facet is not None and not pbc.in_undrained_steps:
+                self._drain_bcs.update({id(bc), id(bc0)})
         self.plate_U = 0.0
         self._plate = None
         if self.plates:
@@ -266,7 +271,8 @@ class BiotProblem:
         self.x = fpetsc.create_vector(spaces)
         self.dx_vec = fpetsc.create_vector(spaces)
         self._tmp = fpetsc.create_vector(spaces)
-        self._bcs0_zero = fem.bcs_by_block(spaces, self._bcs_zero)
+        self._spaces = spaces
+        self._undrained = False
         self._bc_targets = [(bc, self.u if V._cpp_object.contains(bc.function_space) else self.p)
                             for bc in self._bcs]
         is_u = is_p = nns = None
@@ -354,10 +360,17 @@ class BiotProblem:
         self.qp.evaluate(float(self.dt.value))
         self.timings["law"] += time.perf_counter() - t0
 
+    def _active(self, bcs: list) -> list:
+        """The boundary conditions active in the current step (drainage off when undrained)."""
+        if not self._undrained:
+            return bcs
+        return [bc for bc in bcs if id(bc) not in self._drain_bcs]
+
     def _apply_bc_values(self) -> None:
         """Put the prescribed values into the fields; Newton increments then vanish there."""
         for bc, f in self._bc_targets:
-            bc.set(f.x.array)
+            if not (self._undrained and id(bc) in self._drain_bcs):
+                bc.set(f.x.array)
 
     def _assemble_residual(self) -> None:
         """Residual with zero rows at constrained dofs (their values are already imposed)."""
@@ -370,7 +383,9 @@ class BiotProblem:
             bl.set(0.0)
         fpetsc.assemble_vector(b, self._F_forms)
         b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-        fpetsc.set_bc(b, self._bcs0_zero)
+        from dolfinx import fem
+
+        fpetsc.set_bc(b, fem.bcs_by_block(self._spaces, self._active(self._bcs_zero)))
         b.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
         self.timings["assemble_F"] += time.perf_counter() - t0
 
@@ -379,15 +394,16 @@ class BiotProblem:
         from dolfinx.fem import petsc as fpetsc
 
         key = float(self.dt.value)
+        bcs = self._active(self._bcs)
         if self.qp.linear and self._matrix_key == key:
             return False
         t0 = time.perf_counter()
         self.A.zeroEntries()
-        fpetsc.assemble_matrix(self.A, self._J_forms, bcs=self._bcs, diag=1.0)
+        fpetsc.assemble_matrix(self.A, self._J_forms, bcs=bcs, diag=1.0)
         self.A.assemble()
         if self.P is not None:
             self.P.zeroEntries()
-            fpetsc.assemble_matrix(self.P, self._P_forms, bcs=self._bcs, diag=1.0)
+            fpetsc.assemble_matrix(self.P, self._P_forms, bcs=bcs, diag=1.0)
             self.P.assemble()
         self.ksp.setOperators(self.A, self.P if self.P is not None else self.A)
         self._matrix_key = key
@@ -439,6 +455,7 @@ class BiotProblem:
         t_start = time.perf_counter()
         nw = self.options.newton
         self._set_step_constants(dt, load_factor)
+        self._undrained = dt == 0.0
         info = StepInfo(converged=False)
         plate = self._plate
         ref = self._R_run.copy()
@@ -508,7 +525,7 @@ class BiotProblem:
             rhs = self._tmp
             with rhs.localForm() as rl:
                 rl.set(0.0)
-            unit_bcs = plate["unit_bcs"]
+            unit_bcs = self._active(plate["unit_bcs"])
             bcs1 = self._bcs_by_block_J(unit_bcs)
             fpetsc.apply_lifting(rhs, self._J_forms, bcs=bcs1, alpha=1.0)
             rhs.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
@@ -580,7 +597,7 @@ class BiotProblem:
 
         mesh = self.mesh
         gx = mesh.geometry.x
-        cdm = mesh.geometry.dofmap
+        cdm = mesh.geometry.dofmaps[0]
         layers = []
         for name, mat in self.materials.items():
             cells = self.md.cell_tags.find(self.md.cell_tag(name))

@@ -211,10 +211,16 @@ class PressureBC:
     """Prescribed excess pore pressure (kPa) on a facet group (drained boundary: 0).
 
     ``facet=None`` fixes every pressure dof (a drained analysis through the same pipeline).
+    A drainage condition on a facet group is not applied in undrained steps (``dt = 0``): the
+    instantaneous response has no flow, and at ``t = 0+`` the exact pressure equals its undrained
+    value everywhere in the open domain (the drained boundary layer has zero thickness), which no
+    continuous pressure space can follow with a jump at the boundary nodes (Gibbs overshoot;
+    Haga, Osnes & Langtangen, IJNAMG 36, 2012). Set ``in_undrained_steps=True`` to keep it.
     """
 
     facet: str | None
     value: float = 0.0
+    in_undrained_steps: bool = False
 
 
 @dataclass(frozen=True)

@@ -343,6 +343,121 @@ def mandel(size: str = "fast", pair: str = "Q2Q1", n: int | None = None,
                  "timings": problem.timings})
 
 
+# ---------------------------------------------------------------------------- first-step check
+def oscillation_measure(p: np.ndarray, p0: float) -> float:
+    """Spurious-oscillation measure of a pressure profile ordered by increasing depth.
+
+    In 1D consolidation just after loading, the exact excess pressure rises monotonically from
+    0 at the drained top to ``p0``. The measure adds the overshoot above ``p0`` and every
+    decrease with depth, relative to ``p0``: 0 for a monotone, bounded profile.
+    """
+    p = np.asarray(p, dtype=float)
+    over = max(0.0, float(p.max()) - p0)
+    drops = float(np.clip(p[:-1] - p[1:], 0.0, None).sum())
+    return (over + drops) / p0
+
+
+def first_step_oscillation(pair: str = "Q2Q1", stabilise: bool = True, nz: int = 20,
+                           T_first: float = 0.0, comm: Any = None) -> dict[str, Any]:
+    """Pressure profile of the Terzaghi column after the first step; its oscillation measure.
+
+    ``T_first = 0`` is the undrained loading step (``dt = 0``); a small positive ``T_first``
+    adds one drained step of that time factor. Uniform mesh of ``nz`` cells, same data as
+    :func:`terzaghi`. Returns ``{"measure", "profile", "z", "p0"}``.
+    """
+    from pilegroup.constitutive.soil import LinearElastic
+    from pilegroup.geometry.box import build_box
+    from pilegroup.solver import (
+        GAMMA_W,
+        BiotProblem,
+        Discretisation,
+        DisplacementBC,
+        PressureBC,
+        SoilMaterial,
+        SurfaceLoad,
+    )
+
+    comm = comm or _comm()
+    H, E, nu, k, n, q = 10.0, 1.0e4, 0.3, 1.0e-3, 0.4, 100.0
+    md = build_box(comm, (0.0, 1.0), (0.0, 1.0), np.linspace(-H, 0.0, nz + 1), 1, 1)
+    mat = SoilMaterial(LinearElastic(E, nu), k_m_per_day=k, porosity=n)
+    m_oed = E * (1 - nu) / ((1 + nu) * (1 - 2 * nu))
+    p0 = q / (1.0 + m_oed * mat.storage)
+    cv = (k / GAMMA_W) / (mat.storage + 1.0 / m_oed)
+    pb = BiotProblem(
+        md, {"soil_layer_01": mat}, Discretisation(pair=pair, stabilise=stabilise),
+        displacement_bcs=[DisplacementBC("side_xmin", 0), DisplacementBC("side_xmax", 0),
+                          DisplacementBC("side_ymin", 1), DisplacementBC("side_ymax", 1),
+                          DisplacementBC("bottom", 2)],
+        pressure_bcs=[PressureBC("ground_surface")],
+        loads=[SurfaceLoad("ground_surface", q)], self_weight=False)
+    info = pb.solve_step(0.0, 1.0)
+    assert info.converged, info.message
+    pb.commit()
+    if T_first > 0:
+        info = pb.solve_step(T_first * H**2 / cv, 1.0)
+        assert info.converged, info.message
+        pb.commit()
+    z = np.linspace(0.0, -H, 4 * nz + 1)  # by increasing depth (vertices and mid-points)
+    prof = _p_along(pb, z, 0.0, 0.0)
+    return {"measure": oscillation_measure(prof, p0), "profile": prof, "z": z, "p0": p0}
+
+
+def footing_undrained_roughness(pair: str = "Q2Q1", stabilise: bool = True, n: int = 12,
+                                comm: Any = None) -> dict[str, Any]:
+    """Checkerboard measure of the undrained pressure under a strip load (inf-sup check).
+
+    Plane-strain slab ``[0, 4] x [-4, 0] m`` (one cell thick), rollers on sides and bottom,
+    100 kPa on ``x < 1`` of the top, one undrained step. Nearly incompressible undrained
+    response (water compressibility only), where an unstable pair shows a checkerboard.
+    The measure is ``max |p_ij - mean of its 4 neighbours| / max |p|`` over interior vertices
+    of the x–z grid: O(h^2) for a smooth field, O(1) for a checkerboard.
+    """
+    from dolfinx import mesh as dmesh
+
+    from pilegroup.constitutive.soil import LinearElastic
+    from pilegroup.geometry.box import build_box
+    from pilegroup.geometry.meshdata import MeshData
+    from pilegroup.solver import (
+        BiotProblem,
+        Discretisation,
+        DisplacementBC,
+        SoilMaterial,
+        SurfaceLoad,
+    )
+
+    comm = comm or _comm()
+    L, thick = 4.0, 0.25
+    md0 = build_box(comm, (0.0, L), (0.0, thick), np.linspace(-L, 0.0, n + 1), n, 1)
+    msh = md0.mesh
+    fdim = msh.topology.dim - 1
+    foot = dmesh.locate_entities_boundary(
+        msh, fdim, lambda x: np.isclose(x[2], 0.0) & (x[0] <= 0.25 * L + 1e-9))
+    idx = np.concatenate([md0.facet_tags.indices, foot])
+    val = np.concatenate([md0.facet_tags.values, np.full(foot.size, 7, dtype=np.int32)])
+    keep = np.ones(idx.size, dtype=bool)
+    keep[: md0.facet_tags.indices.size] = ~np.isin(md0.facet_tags.indices, foot)
+    order = np.argsort(idx[keep], kind="stable")
+    ft = dmesh.meshtags(msh, fdim, idx[keep][order], val[keep][order])
+    md = MeshData(msh, md0.cell_tags, ft, md0.cell_names, {**md0.facet_names, "footing": 7})
+    mat = SoilMaterial(LinearElastic(1.0e4, 0.3), k_m_per_day=1e-3, porosity=0.4)
+    pb = BiotProblem(
+        md, {"soil_layer_01": mat}, Discretisation(pair=pair, stabilise=stabilise),
+        displacement_bcs=[DisplacementBC("side_xmin", 0), DisplacementBC("side_xmax", 0),
+                          DisplacementBC("side_ymin", 1), DisplacementBC("side_ymax", 1),
+                          DisplacementBC("bottom", 2), DisplacementBC("bottom", 0)],
+        loads=[SurfaceLoad("footing", 100.0)], self_weight=False)
+    info = pb.solve_step(0.0, 1.0)
+    assert info.converged, info.message
+    xs = np.linspace(0.0, L, n + 1)
+    zs = np.linspace(-L, 0.0, n + 1)
+    X, Z = np.meshgrid(xs, zs, indexing="ij")
+    pts = np.column_stack([X.ravel(), np.zeros(X.size), Z.ravel()])
+    P = _eval_points(pb.p, pts).reshape(n + 1, n + 1)
+    r = P[1:-1, 1:-1] - 0.25 * (P[:-2, 1:-1] + P[2:, 1:-1] + P[1:-1, :-2] + P[1:-1, 2:])
+    return {"measure": float(np.abs(r).max() / np.abs(P).max()), "p": P}
+
+
 CASES: dict[str, Callable[..., CaseResult]] = {
     "terzaghi": terzaghi,
     "mandel": mandel,

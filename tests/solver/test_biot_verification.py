@@ -1,0 +1,187 @@
+"""Biot solver: verification cases (fast sizes), first-step oscillations, presets, stepper."""
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from pilegroup.solver import SolverError, StepFailure, StepInfo, TimeStepping
+from pilegroup.solver.stepping import AdaptiveStepper
+from pilegroup.studies import verification as ver
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+@pytest.mark.parametrize("pair", ["Q2Q1", "Q1Q1"])
+def test_terzaghi(pair):
+    r = ver.terzaghi(size="fast", pair=pair)
+    assert len(r.details["rows"]) == 4
+    assert r.error <= r.tolerance == 0.01, r.details["rows"]
+    assert r.passed
+
+
+@pytest.mark.parametrize("pair", ["Q2Q1", "Q1Q1"])
+def test_mandel(pair):
+    r = ver.mandel(size="fast", pair=pair)
+    assert r.error <= r.tolerance == 0.02, r.details["rows"]
+    # the Mandel-Cryer rise is reproduced: centre pressure above its initial value
+    assert r.details["peak_ratio_fe"] > 1.05
+    assert r.passed
+
+
+def test_fieldsplit_preset_matches_direct():
+    a = ver.mandel(size="fast", pair="Q1Q1", preset="direct")
+    b = ver.mandel(size="fast", pair="Q1Q1", preset="fieldsplit_gamg")
+    pa = np.array([row["p_h"] for row in a.details["rows"]])
+    pb = np.array([row["p_h"] for row in b.details["rows"]])
+    assert np.allclose(pa, pb, rtol=1e-7)
+
+
+@pytest.mark.parametrize("pair,stab", [("Q2Q1", True), ("Q1Q1", True), ("Q1Q1", False)])
+def test_undrained_first_step_is_uniform(pair, stab):
+    r = ver.first_step_oscillation(pair, stab, nz=20, T_first=0.0)
+    assert r["measure"] < 1e-10
+    assert np.allclose(r["profile"], r["p0"], rtol=1e-10)
+
+
+def test_checkerboard_measure_separates_stable_and_unstable_pairs():
+    stable = [ver.footing_undrained_roughness(p, s, n=8)["measure"]
+              for p, s in [("Q2Q1", True), ("Q1Q1", True)]]
+    unstable = ver.footing_undrained_roughness("Q1Q1", False, n=8)["measure"]
+    assert max(stable) < 0.1
+    assert unstable > 0.2  # the measure does detect the Q1-Q1 checkerboard
+
+
+def test_oscillation_measure():
+    assert ver.oscillation_measure(np.array([0.0, 0.5, 1.0, 1.0]), 1.0) == 0.0
+    assert ver.oscillation_measure(np.array([0.0, 1.2, 1.0]), 1.0) == pytest.approx(0.4)
+
+
+def test_mandel_closed_form_limits():
+    # t -> 0+: uniform p0 = F B (1 + nu_u) / (3 a); decays to 0
+    F, a, B, nu, nu_u, c = 100.0, 1.0, 0.9, 0.25, 0.45, 1.0
+    p0 = F * B * (1 + nu_u) / (3 * a)
+    p = ver.mandel_centre_pressure(np.array([1e-6, 0.05, 10.0]), F, a, B, nu, nu_u, c,
+                                   n_terms=5000)
+    assert p[0] == pytest.approx(p0, rel=1e-3)
+    assert p[1] > p0
+    assert abs(p[2]) < 1e-6 * p0
+
+
+def test_terzaghi_series_limits():
+    assert ver.terzaghi_series(np.array([5.0]), 10.0, 1e-3, 1.0)[0] == pytest.approx(1.0, 1e-9)
+    assert ver.terzaghi_degree(1e-8) == pytest.approx(0.0, abs=1e-3)
+    assert ver.terzaghi_degree(3.0) == pytest.approx(1.0, abs=1e-3)
+
+
+class FakeProblem:
+    """Scalar problem failing whenever dt > dt_fail; records commits and rollbacks."""
+
+    def __init__(self, dt_fail):
+        self.dt_fail = dt_fail
+        self.t = 0.0
+        self.trial = None
+        self.commits = 0
+        self.rollbacks = 0
+
+    def solve_step(self, dt, lam):
+        if dt > self.dt_fail or not np.isfinite(dt):
+            self.trial = np.nan
+            return StepInfo(converged=False, message="too large")
+        self.trial = self.t + dt
+        return StepInfo(converged=True, newton_its=2)
+
+    def commit(self):
+        self.t = self.trial
+        self.commits += 1
+
+    def rollback(self):
+        self.trial = None
+        self.rollbacks += 1
+
+
+def test_stepper_cuts_back_grows_and_hits_milestones():
+    pb = FakeProblem(dt_fail=0.3)
+    hits = []
+    st = AdaptiveStepper(TimeStepping(dt0=1.0, dt_min=1e-3, grow=2.0, cut=0.5,
+                                      milestones=(0.7, 2.0)))
+    t = st.advance(pb, 0.0, 3.0, lambda t: 1.0, on_milestone=lambda p, t, s: hits.append(t))
+    assert t == 3.0 and hits == [0.7, 2.0, 3.0]
+    assert pb.rollbacks > 0
+    assert pb.t == pytest.approx(3.0, abs=1e-12)
+    assert all(s.dt <= 0.3 for s in st.log.steps)
+
+
+def test_stepper_raises_below_dt_min():
+    st = AdaptiveStepper(TimeStepping(dt0=1.0, dt_min=0.1, cut=0.5))
+    with pytest.raises(StepFailure):
+        st.advance(FakeProblem(dt_fail=0.01), 0.0, 1.0, lambda t: 1.0)
+
+
+def test_geostatic_stage_equilibrium_and_reset():
+    from mpi4py import MPI
+
+    from pilegroup.constitutive.soil import LinearElastic
+    from pilegroup.geometry.box import build_box, graded_levels
+    from pilegroup.solver import (
+        GAMMA_W,
+        BiotProblem,
+        DisplacementBC,
+        PressureBC,
+        SoilMaterial,
+        Stage,
+        run_stages,
+    )
+
+    md = build_box(MPI.COMM_WORLD, (0, 2), (0, 2), graded_levels(-10, 0, 5, 1.0), 1, 1,
+                   layer_tops=[-4.0])
+    mats = {"soil_layer_01": SoilMaterial(LinearElastic(5e3, 0.3), 1e-4, 0.5, gamma_sat=18.0),
+            "soil_layer_02": SoilMaterial(LinearElastic(2e4, 0.25), 1e-4, 0.4, gamma_sat=20.0,
+                                          K0=0.6)}
+    bcs = [DisplacementBC("side_xmin", 0), DisplacementBC("side_xmax", 0),
+           DisplacementBC("side_ymin", 1), DisplacementBC("side_ymax", 1),
+           DisplacementBC("bottom", 2)]
+    pb = BiotProblem(md, mats, displacement_bcs=bcs, pressure_bcs=[PressureBC("ground_surface")])
+    log = run_stages(pb, [Stage("geo", "geostatic")], TimeStepping())
+    assert log.geostatic_max_u < 1e-9
+    assert pb.max_displacement() == 0.0
+    for g in pb.qp.groups:
+        z = g.x[:, 2]
+        g1, g2 = 18.0 - GAMMA_W, 20.0 - GAMMA_W
+        sv = np.where(z > -4, g1 * z, -4 * g1 + g2 * (z + 4))
+        s = g.state_n["stress"]
+        assert np.allclose(s[:, 2], sv, rtol=1e-8, atol=1e-8)
+        k0 = 0.3 / 0.7 if g.name == "soil_layer_01" else 0.6
+        assert np.allclose(s[:, 0], k0 * sv, rtol=1e-8, atol=1e-8)
+    # a wrong initial stress is detected by the equilibrium check
+    pb2 = BiotProblem(md, mats, displacement_bcs=bcs)
+    pb2.geostatic_stress = lambda: {g.name: None for g in pb2.qp.groups}
+    with pytest.raises(SolverError):
+        run_stages(pb2, [Stage("geo", "geostatic")], TimeStepping(), geostatic_tol=1e-6)
+
+
+def _json_lines(out):
+    return {d["case"]: d for d in (json.loads(x) for x in out.splitlines() if x.startswith("{"))}
+
+
+@pytest.mark.mpi
+def test_cases_under_mpirun_match_serial():
+    cases = ["terzaghi", "mandel"]
+    py = sys.executable
+    mpirun = str(Path(py).parent / "mpirun")
+    cmd = ["-m", "pilegroup.studies.verification", *cases, "--json"]
+    serial = subprocess.run([py, *cmd], capture_output=True, text=True, cwd=ROOT, timeout=900)
+    par = subprocess.run([mpirun, "-n", "2", py, *cmd], capture_output=True, text=True,
+                         cwd=ROOT, timeout=900)
+    assert par.returncode == 0, par.stderr[-2000:]
+    s, p = _json_lines(serial.stdout), _json_lines(par.stdout)
+    for c in cases:
+        assert p[c]["passed"] and p[c]["details"]["ranks"] == 2
+        assert p[c]["error"] == pytest.approx(s[c]["error"], rel=1e-8)
+        key = "rows"
+        for rs, rp in zip(s[c]["details"][key], p[c]["details"][key], strict=True):
+            for k, v in rs.items():
+                assert rp[k] == pytest.approx(v, rel=1e-8, abs=1e-12)
