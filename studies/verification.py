@@ -22,7 +22,7 @@ import numpy as np
 
 import pilegroup  # noqa: F401  (dolfinx_solver before dolfinx)
 
-__all__ = ["CASES", "CaseResult", "run_cases", "terzaghi", "mandel",
+__all__ = ["CASES", "CaseResult", "run_cases", "terzaghi", "mandel", "triaxial",
            "terzaghi_series", "mandel_centre_pressure", "main"]
 
 
@@ -458,9 +458,99 @@ def footing_undrained_roughness(pair: str = "Q2Q1", stabilise: bool = True, n: i
     return {"measure": float(np.abs(r).max() / np.abs(P).max()), "p": P}
 
 
+# ---------------------------------------------------------------------------- triaxial
+def triaxial(size: str = "fast", pair: str = "Q2Q1", n: int | None = None,
+             preset: str = "direct", xi: float = 0.02, law: str = "mc",
+             comm: Any = None) -> CaseResult:
+    """Drained triaxial compression of a Mohr–Coulomb block to failure.
+
+    Block 1 x 1 x 1 m, rollers on ``x = 0``, ``y = 0``, ``z = 0``; initial effective stress
+    ``(-sigma_c, -(1 + xi) sigma_c, -sigma_c)`` with ``sigma_c = 100 kPa``, held by the confining
+    pressures on ``x = 1`` and ``y = 1``; the top is pushed down by 2 cm (displacement control)
+    in ramped steps; the pore pressure is fixed to 0 everywhere (drained). Soil: Mohr–Coulomb
+    (``law="mc"``) or Drucker–Prager matched on the compression meridian (``law="dp"``),
+    E = 20 MPa, nu = 0.3, c = 10 kPa, phi = 30 deg, psi = 0.
+
+    ``xi = 0.02`` puts the intermediate stress slightly above the minor one, so failure is on a
+    face of the Mohr–Coulomb pyramid. With ``xi = 0`` (conventional triaxial) failure is on the
+    edge ``sigma_2 = sigma_3``, where the perfectly plastic tangent leaves the split of the
+    lateral plastic strain between x and y undetermined: the Jacobian is singular and Newton
+    does not converge (measured; the Drucker–Prager cone has no edge and converges with
+    ``xi = 0``). Mohr–Coulomb ignores the intermediate stress, so the failure load is the same.
+
+    Reference (closed form): at failure the axial stress is
+    ``sigma_1 = sigma_3 N + 2 c sqrt(N)``, ``N = (1 + sin phi)/(1 - sin phi)`` (compression
+    positive, ``sigma_3 = sigma_c``), so the top reaction is ``-sigma_1 A`` (e.g. Wood, *Soil
+    Behaviour and Critical State Soil Mechanics*, 1990, ch. 4). Error: relative difference of
+    the reaction at the last step; tolerance 1e-6 (issue 5). The details give the reaction
+    history (plateau).
+    """
+    from pilegroup.constitutive.soil import DruckerPrager, MohrCoulomb
+    from pilegroup.geometry.box import build_box
+    from pilegroup.solver import (
+        BiotProblem,
+        Discretisation,
+        DisplacementBC,
+        PressureBC,
+        SoilMaterial,
+        SolverOptions,
+        Stage,
+        SurfaceLoad,
+        TimeStepping,
+        run_stages,
+    )
+
+    comm = comm or _comm()
+    t0 = time.perf_counter()
+    n = n or {"fast": 2, "bench": 4}[size]
+    sc, c, phi = 100.0, 10.0, 30.0
+    if law == "mc":
+        soil = MohrCoulomb(E=2.0e4, nu=0.3, c=c, phi_deg=phi, psi_deg=0.0)
+    else:
+        soil = DruckerPrager(E=2.0e4, nu=0.3, c=c, phi_deg=phi, psi_deg=0.0)
+    md = build_box(comm, (0.0, 1.0), (0.0, 1.0), np.linspace(0.0, 1.0, n + 1), n, n)
+    mat = SoilMaterial(soil, k_m_per_day=1e-3, porosity=0.4)
+    pb = BiotProblem(
+        md, {"soil_layer_01": mat}, Discretisation(pair=pair),
+        displacement_bcs=[DisplacementBC("side_xmin", 0), DisplacementBC("side_ymin", 1),
+                          DisplacementBC("bottom", 2),
+                          DisplacementBC("ground_surface", 2, value=-0.02)],
+        pressure_bcs=[PressureBC(None)],
+        loads=[SurfaceLoad("side_xmax", sc, ramp=False),
+               SurfaceLoad("side_ymax", sc * (1 + xi), ramp=False)],
+        options=SolverOptions(preset=preset, prefix=f"triax_{pair}_"),
+        self_weight=False,
+    )
+    s0 = np.array([-sc, -sc * (1 + xi), -sc, 0.0, 0.0, 0.0])
+    pb.set_initial_stress({"soil_layer_01": s0})
+    hist: list[dict[str, float]] = []
+
+    def record(p: Any, t: float, stage: str) -> None:
+        hist.append({"t": t, "axial_strain": 0.02 * t, "reaction_kN": p.reaction(
+            "ground_surface", 2)})
+
+    ts = TimeStepping(dt0=0.05, dt_min=1e-6, dt_max=0.1, grow=1.5,
+                      milestones=tuple(np.round(np.arange(0.1, 1.0, 0.1), 12)))
+    log = run_stages(pb, [Stage("shear", "load", 1.0, 1.0)], ts, on_milestone=record)
+    N = (1 + math.sin(math.radians(phi))) / (1 - math.sin(math.radians(phi)))
+    s1 = sc * N + 2 * c * math.sqrt(N)
+    R = hist[-1]["reaction_kN"]
+    err = abs(R + s1) / s1
+    tol = 1e-6
+    return CaseResult(
+        "triaxial", err, tol, bool(err <= tol), time.perf_counter() - t0, pb.num_dofs,
+        log.newton_total, len(log.steps),
+        reference="Mohr-Coulomb failure stress sigma_1 = sigma_3 N + 2 c sqrt(N)",
+        details={"pair": pair, "n": n, "failure_load_ref_kN": -s1, "reaction_kN": R,
+                 "rows": hist, "rejected": log.rejected, "ranks": comm.size,
+                 "newton_per_step": [s.newton_its for s in log.steps],
+                 "timings": pb.timings})
+
+
 CASES: dict[str, Callable[..., CaseResult]] = {
     "terzaghi": terzaghi,
     "mandel": mandel,
+    "triaxial": triaxial,
 }
 
 
