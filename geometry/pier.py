@@ -135,10 +135,10 @@ class BuildResult:
 def _progression(length: float, first: float, last: float) -> tuple[int, float]:
     """Edges and ratio of a geometric distribution of ``length`` (m) from ``first`` to ~``last``.
 
-    Uniform when ``first >= last``.
+    Uniform (edges <= ``first``) when ``first >= last``.
     """
     if first >= last * 0.999 or length <= first:
-        n = max(1, round(length / min(first, max(last, first))))
+        n = max(1, math.ceil(length / first - 1e-9))  # edges <= first (= h at the pile)
         return n, 1.0
     best: tuple[float, int, float] | None = None
     for n in range(1, 400):
