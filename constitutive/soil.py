@@ -281,15 +281,36 @@ class MohrCoulomb(_ElastoPlastic):
         return self._f_principal(w[:, ::-1])
 
     def _trial_plastic(self, sig_tr: np.ndarray) -> np.ndarray:
-        # closed-form principal stresses are fast but lose accuracy (~sqrt(eps)) near
-        # coincident eigenvalues: points within a band of the surface are re-checked with LAPACK
-        s = principal_stresses(sig_tr)
+        # 1) cheap upper bound from p and J2 only (no trigonometry):
+        #    s1 - s3 <= 2 sqrt(J2), s1 + s3 = 2p - (s2 - p) <= 2p + sqrt(J2/3)
+        sf, cf = math.sin(math.radians(self.phi_deg)), math.cos(math.radians(self.phi_deg))
+        p = sig_tr[:, 0] + sig_tr[:, 1]
+        p += sig_tr[:, 2]
+        p /= 3.0
+        J2 = np.einsum("ij,ij->i", sig_tr, sig_tr)
+        J2 -= 3.0 * p * p
+        J2 *= 0.5
+        q = np.sqrt(np.maximum(J2, 0.0), out=J2)
+        f_ub = (2.0 + sf / math.sqrt(3.0)) * q
+        f_ub += 2.0 * sf * p
+        f_ub -= 2.0 * self.c * cf
+        scale = np.abs(p) + q + self.c  # >= |s_i| / 2
+        plastic = np.zeros(sig_tr.shape[0], dtype=bool)
+        cand = f_ub > -1e-6 * scale
+        if not np.any(cand):
+            return plastic
+        idx = np.nonzero(cand)[0]
+        # 2) closed-form principal stresses on the candidates; they lose accuracy (~sqrt(eps))
+        #    near coincident eigenvalues, so points within a band are re-checked with LAPACK
+        sc = sig_tr[idx]
+        s = principal_stresses(sc)
         f = self._f_principal(s)
-        scale = np.abs(s).max(axis=1) + self.c
-        near = np.abs(f) <= 1e-6 * scale
+        sck = np.abs(s).max(axis=1) + self.c
+        near = np.abs(f) <= 1e-6 * sck
         if np.any(near):
-            f[near] = self.yield_function(sig_tr[near])
-        return f > 1e-12 * scale
+            f[near] = self.yield_function(sc[near])
+        plastic[idx] = f > 1e-12 * sck
+        return plastic
 
     def _return(self, sig_tr: np.ndarray):
         """Return mapping of trial stresses known to be outside the surface."""
