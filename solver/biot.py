@@ -41,6 +41,7 @@ from pilegroup.solver.inputs import (
     GAMMA_W,
     Discretisation,
     DisplacementBC,
+    ElasticSolid,
     PressureBC,
     RigidPlate,
     SoilMaterial,
@@ -80,7 +81,10 @@ class BiotProblem:
 
     Args:
         md: mesh and tags.
-        materials: cell-group name -> :class:`SoilMaterial`; every cell must be covered.
+        materials: cell-group name -> :class:`SoilMaterial` or :class:`ElasticSolid`; every
+            cell must be covered. With solids, the pressure lives on the soil sub-mesh only
+            (``dolfinx.mesh.create_submesh``; forms with ``entity_maps``) and the displacement
+            is continuous across (piles tied to the soil).
         disc: element pair.
         displacement_bcs: prescribed displacement components.
         pressure_bcs: prescribed excess pore pressures (drained boundaries).
@@ -93,7 +97,7 @@ class BiotProblem:
     def __init__(
         self,
         md: Any,
-        materials: Mapping[str, SoilMaterial],
+        materials: Mapping[str, SoilMaterial | ElasticSolid],
         disc: Discretisation | None = None,
         displacement_bcs: Sequence[DisplacementBC] = (),
         pressure_bcs: Sequence[PressureBC] = (),
@@ -129,15 +133,17 @@ class BiotProblem:
         # --- cells per material group (owned cells)
         imap = mesh.topology.index_map(tdim)
         n_owned = imap.size_local
-        groups: dict[str, tuple[SoilMaterial, np.ndarray]] = {}
+        groups: dict[str, tuple[Any, np.ndarray]] = {}
         covered = np.zeros(n_owned + imap.num_ghosts, dtype=bool)
+        soil_cells = []
         for name, mat in self.materials.items():
-            if not isinstance(mat, SoilMaterial):
+            if not isinstance(mat, SoilMaterial | ElasticSolid):
                 raise SolverInputError(
-                    f"materials[{name!r}] = {type(mat).__name__}; only SoilMaterial is supported "
-                    "(elastic piles without pressure need the pile sub-mesh of issue 6)"
-                )
+                    f"materials[{name!r}] = {type(mat).__name__}; allowed: SoilMaterial, "
+                    "ElasticSolid")
             cells = md.cell_tags.find(md.cell_tag(name))
+            if isinstance(mat, SoilMaterial):
+                soil_cells.append(cells)
             covered[cells] = True
             groups[name] = (mat, cells[cells < n_owned])
         if not covered[:n_owned].all():
@@ -151,7 +157,19 @@ class BiotProblem:
         Ve = basix.ufl.element("Lagrange", cell, disc.u_degree, shape=(3,))
         Qe = basix.ufl.element("Lagrange", cell, 1)
         self.V = V = fem.functionspace(mesh, Ve)
-        self.Q = Q = fem.functionspace(mesh, Qe)
+        self.soil_tags = tuple(md.cell_tag(nm) for nm, m in self.materials.items()
+                               if isinstance(m, SoilMaterial))
+        self.has_solids = len(self.soil_tags) < len(self.materials)
+        self.p_mesh = mesh
+        self._emaps: list[Any] | None = None
+        self._vmap = None
+        if self.has_solids:
+            from dolfinx import mesh as dmesh
+
+            sc = np.unique(np.concatenate(soil_cells)).astype(np.int32)
+            self.p_mesh, emap, self._vmap, _ = dmesh.create_submesh(mesh, tdim, sc)
+            self._emaps = [emap]
+        self.Q = Q = fem.functionspace(self.p_mesh, Qe)
         self.u = fem.Function(V, name="displacement")
         self.p = fem.Function(Q, name="excess_pore_pressure")
         self.u_n = fem.Function(V)
@@ -167,6 +185,8 @@ class BiotProblem:
         self._tau = fem.Function(D0)
         self._beta = fem.Function(D0)
         for name, mat in self.materials.items():
+            if not isinstance(mat, SoilMaterial):
+                continue
             cells = md.cell_tags.find(md.cell_tag(name))
             K, G = mat.elastic_moduli()
             self._S.x.array[cells] = mat.storage
@@ -174,12 +194,25 @@ class BiotProblem:
             self._gam.x.array[cells] = mat.gamma_sat - GAMMA_W
             self._tau.x.array[cells] = disc.stab_factor / (2.0 * G)
             self._beta.x.array[cells] = 1.0 / K
+        self._layers = self._soil_layers()
+        if self.has_solids:
+            from dolfinx import mesh as dmesh
+
+            for name, mat in self.materials.items():
+                if isinstance(mat, SoilMaterial):
+                    continue
+                cells = md.cell_tags.find(md.cell_tag(name))
+                zc = dmesh.compute_midpoints(mesh, tdim, cells)[:, 2]
+                self._gam.x.array[cells] = self._layer_value(zc, 2)
 
         self.dt = fem.Constant(mesh, default_scalar_type(0.0))
         self.load_factor = 0.0
         qdeg = disc.quadrature_degree
-        dx = ufl.Measure("dx", domain=mesh)
         dxq = ufl.Measure("dx", domain=mesh, metadata={"quadrature_degree": qdeg})
+        if self.has_solids:  # pressure terms on the soil cells only
+            dx = ufl.Measure("dx", domain=mesh, subdomain_data=md.cell_tags)(self.soil_tags)
+        else:
+            dx = ufl.Measure("dx", domain=mesh)
         ds = ufl.Measure("ds", domain=mesh, subdomain_data=md.facet_tags)
         self.qp = QuadratureState(mesh, groups, qdeg, eps_mandel(self.u) - eps_mandel(self.u_n))
         sig, Dt = self.qp.stress, self.qp.tangent
@@ -202,22 +235,25 @@ class BiotProblem:
         J_pp = S * dp * q * dx + dt * mob * ufl.inner(ufl.grad(dp), ufl.grad(q)) * dx
         self.stabilised = disc.pair == "Q1Q1" and disc.stabilise
         if self.stabilised:
-            dx_full = ufl.Measure("dx", domain=mesh, metadata={"quadrature_degree": 2})
-            dx_one = ufl.Measure("dx", domain=mesh, metadata={"quadrature_degree": 1})
+            sd = dict(subdomain_data=md.cell_tags, subdomain_id=self.soil_tags) \
+                if self.has_solids else {}
+            dx_full = ufl.Measure("dx", domain=mesh, metadata={"quadrature_degree": 2}, **sd)
+            dx_one = ufl.Measure("dx", domain=mesh, metadata={"quadrature_degree": 1}, **sd)
             tau = self._tau
             F_p += tau * (p - p_n) * q * dx_full - tau * (p - p_n) * q * dx_one
             J_pp += tau * dp * q * dx_full - tau * dp * q * dx_one
         J_uu = ufl.inner(ufl.dot(Dt, eps_mandel(du)), eps_mandel(v)) * dxq
         J_up = -dp * ufl.div(v) * dx
         J_pu = ufl.div(du) * q * dx
-        self._F_forms = fem.form([F_u, F_p])
-        self._F_u_form = fem.form(F_u)
-        self._J_forms = fem.form([[J_uu, J_up], [J_pu, J_pp]])
+        em = self._emaps
+        self._F_forms = fem.form([F_u, F_p], entity_maps=em)
+        self._F_u_form = fem.form(F_u, entity_maps=em)
+        self._J_forms = fem.form([[J_uu, J_up], [J_pu, J_pp]], entity_maps=em)
         preset = get_preset(self.options.preset)
         self._P_forms = None
         if preset.fixed_stress:
             self._P_forms = fem.form(
-                [[J_uu, J_up], [J_pu, J_pp + self._beta * dp * q * dx]])
+                [[J_uu, J_up], [J_pu, J_pp + self._beta * dp * q * dx]], entity_maps=em)
 
         # --- boundary conditions
         self._bcs = []
@@ -240,7 +276,7 @@ class BiotProblem:
                 dofs = np.arange(qmap.size_local + qmap.num_ghosts, dtype=np.int32)
             else:
                 facets = md.facet_tags.find(md.facet_tag(pbc.facet))
-                dofs = fem.locate_dofs_topological(Q, fdim, facets)
+                dofs = self._pressure_dofs_on(facets)
             bc = fem.dirichletbc(default_scalar_type(pbc.value), dofs, Q)
             bc0 = fem.dirichletbc(default_scalar_type(0.0), dofs, Q)
             self._bcs.append(bc)
@@ -286,6 +322,22 @@ class BiotProblem:
         self.qp.initialise({})
 
     # ------------------------------------------------------------------ sizes and helpers
+    def _pressure_dofs_on(self, facets: np.ndarray) -> np.ndarray:
+        """Pressure dofs on parent facets (through the vertices when p is on a sub-mesh)."""
+        from dolfinx import fem
+
+        fdim = self.mesh.topology.dim - 1
+        if not self.has_solids:
+            return fem.locate_dofs_topological(self.Q, fdim, facets)
+        self.mesh.topology.create_connectivity(fdim, 0)
+        f2v = self.mesh.topology.connectivity(fdim, 0)
+        pv = np.unique(np.concatenate([f2v.links(f) for f in facets])) if len(facets) \
+            else np.zeros(0, dtype=np.int32)
+        sv = self._vmap.sub_topology_to_topology(pv.astype(np.int32), inverse=True)
+        sv = sv[sv >= 0].astype(np.int32)
+        self.p_mesh.topology.create_connectivity(0, self.p_mesh.topology.dim)
+        return fem.locate_dofs_topological(self.Q, 0, sv)
+
     @property
     def num_dofs(self) -> int:
         """Global number of unknowns (u and p)."""
@@ -591,39 +643,52 @@ class BiotProblem:
 
         ``sigma'_v(z) = -int_z^{z_top} (gamma_sat - GAMMA_W) dz`` over horizontal layers (the
         groups' elevation ranges, all-reduced), ``sigma'_h = K0 sigma'_v``; ``z_top`` is the
-        highest soil elevation (water table at the ground surface).
+        highest soil elevation (water table at the ground surface). Solids ("wished in place")
+        get the stress and buoyant weight of the soil layer they replace (zero above ground).
         """
-        from mpi4py import MPI
-
-        mesh = self.mesh
-        gx = mesh.geometry.x
-        cdm = mesh.geometry.dofmaps[0]
-        layers = []
-        for name, mat in self.materials.items():
-            cells = self.md.cell_tags.find(self.md.cell_tag(name))
-            z = gx[cdm[cells].reshape(-1), 2] if cells.size else np.array([np.inf])
-            zmin = self.comm.allreduce(float(z.min()), op=MPI.MIN)
-            z = gx[cdm[cells].reshape(-1), 2] if cells.size else np.array([-np.inf])
-            zmax = self.comm.allreduce(float(z.max()), op=MPI.MAX)
-            layers.append((zmin, zmax, mat.gamma_sat - GAMMA_W))
-        z_top = max(lay[1] for lay in layers)
-
-        def sigma_v(z: np.ndarray) -> np.ndarray:
-            s = np.zeros_like(z)
-            for zmin, zmax, g in layers:
-                top = np.minimum(zmax, z_top)
-                bot = np.maximum(zmin, z)
-                s -= g * np.clip(top - bot, 0.0, None)
-            return s
-
         out = {}
         for g in self.qp.groups:
-            sv = sigma_v(g.x[:, 2])
-            k0 = g.material.k0
+            z = g.x[:, 2]
+            sv = self._sigma_v(z)
+            k0 = (g.material.k0 if isinstance(g.material, SoilMaterial)
+                  else self._layer_value(z, 3))
             s = np.zeros((g.n, 6))
             s[:, 0] = s[:, 1] = k0 * sv
             s[:, 2] = sv
             out[g.name] = s
+        return out
+
+    def _soil_layers(self) -> list[tuple[float, float, float, float]]:
+        """(z_min, z_max, buoyant unit weight, K0) of each soil group, all-reduced."""
+        from mpi4py import MPI
+
+        gx = self.mesh.geometry.x
+        cdm = self.mesh.geometry.dofmaps[0]
+        layers = []
+        for name, mat in self.materials.items():
+            if not isinstance(mat, SoilMaterial):
+                continue
+            cells = self.md.cell_tags.find(self.md.cell_tag(name))
+            z = gx[cdm[cells].reshape(-1), 2] if cells.size else None
+            zmin = self.comm.allreduce(float(z.min()) if z is not None else np.inf, op=MPI.MIN)
+            zmax = self.comm.allreduce(float(z.max()) if z is not None else -np.inf, op=MPI.MAX)
+            layers.append((zmin, zmax, mat.gamma_sat - GAMMA_W, mat.k0))
+        return layers
+
+    def _sigma_v(self, z: np.ndarray) -> np.ndarray:
+        """Vertical geostatic effective stress (kPa, negative) at elevations ``z`` (m)."""
+        z_top = max(lay[1] for lay in self._layers)
+        s = np.zeros_like(z)
+        for zmin, zmax, g, _ in self._layers:
+            s -= g * np.clip(np.minimum(zmax, z_top) - np.maximum(zmin, z), 0.0, None)
+        return s
+
+    def _layer_value(self, z: np.ndarray, k: int) -> np.ndarray:
+        """Entry ``k`` of the soil layer containing each elevation (0 outside every layer)."""
+        out = np.zeros_like(z)
+        for lay in self._layers:
+            inside = (z >= lay[0]) & (z <= lay[1])
+            out[inside] = lay[k]
         return out
 
     def set_initial_stress(self, stress0: dict[str, np.ndarray | None]) -> None:

@@ -90,6 +90,38 @@ class SoilMaterial:
 
 
 @dataclass(frozen=True)
+class ElasticSolid:
+    """Linear elastic, impermeable body (piles, cap): no pressure field in its cells.
+
+    Attributes:
+        E: Young's modulus, kPa.
+        nu: Poisson's ratio, -.
+
+    The solid is "wished in place": zero initial stress and no self weight in the geostatic
+    stage (its weight can be applied as part of the loads).
+    """
+
+    E: float
+    nu: float
+
+    def __post_init__(self) -> None:
+        _positive("E", self.E, "kPa")
+        if not -1.0 < self.nu < 0.5:
+            raise SolverInputError(f"nu = {self.nu!r} -; allowed: (-1, 0.5)")
+
+    @property
+    def law(self) -> Any:
+        """The constitutive law (LinearElastic)."""
+        from pilegroup.constitutive.soil import LinearElastic
+
+        return LinearElastic(self.E, self.nu)
+
+    def elastic_moduli(self) -> tuple[float, float]:
+        """(bulk K, shear G), kPa."""
+        return self.E / (3.0 * (1.0 - 2.0 * self.nu)), self.E / (2.0 * (1.0 + self.nu))
+
+
+@dataclass(frozen=True)
 class Discretisation:
     """Finite-element pair and quadrature.
 

@@ -59,6 +59,12 @@ class XDMFSeries:
             self.cell_fields[k] = fem.Function(self.T0 if n == 6 else self.S0, name=name)
         with io.XDMFFile(self.comm, str(self.path), "w") as f:
             f.write_mesh(mesh)
+        # with solids the pressure lives on the soil sub-mesh: its own file
+        self.p_path = None
+        if problem.p_mesh is not mesh:
+            self.p_path = self.path.with_name(self.path.stem + "_pressure.xdmf")
+            with io.XDMFFile(self.comm, str(self.p_path), "w") as f:
+                f.write_mesh(problem.p_mesh)
         self.times: list[float] = []
 
     def _update_cell_fields(self) -> None:
@@ -81,9 +87,13 @@ class XDMFSeries:
         self._update_cell_fields()
         with io.XDMFFile(self.comm, str(self.path), "a") as f:
             f.write_function(self.u1, t)
-            f.write_function(self.problem.p, t)
+            if self.p_path is None:
+                f.write_function(self.problem.p, t)
             for fn in self.cell_fields.values():
                 f.write_function(fn, t)
+        if self.p_path is not None:
+            with io.XDMFFile(self.comm, str(self.p_path), "a") as f:
+                f.write_function(self.problem.p, t)
         self.times.append(float(t))
 
     def close(self) -> None:
