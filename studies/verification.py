@@ -404,6 +404,73 @@ def first_step_oscillation(pair: str = "Q2Q1", stabilise: bool = True, nz: int =
     return {"measure": oscillation_measure(prof, p0), "profile": prof, "z": z, "p0": p0}
 
 
+def _with_footing(md0: Any, width: float) -> Any:
+    """Copy of a box MeshData with the top facets at ``x <= width`` re-tagged ``footing``."""
+    from dolfinx import mesh as dmesh
+
+    from pilegroup.geometry.meshdata import MeshData
+
+    msh = md0.mesh
+    fdim = msh.topology.dim - 1
+    z_top = md0.info["z_top"]
+    foot = dmesh.locate_entities_boundary(
+        msh, fdim, lambda x: np.isclose(x[2], z_top) & (x[0] <= width + 1e-9))
+    idx = np.concatenate([md0.facet_tags.indices, foot])
+    val = np.concatenate([md0.facet_tags.values, np.full(foot.size, 7, dtype=np.int32)])
+    keep = np.ones(idx.size, dtype=bool)
+    keep[: md0.facet_tags.indices.size] = ~np.isin(md0.facet_tags.indices, foot)
+    order = np.argsort(idx[keep], kind="stable")
+    ft = dmesh.meshtags(msh, fdim, idx[keep][order], val[keep][order])
+    return MeshData(msh, md0.cell_tags, ft, md0.cell_names, {**md0.facet_names, "footing": 7},
+                    md0.info)
+
+
+def strip_footing(pair: str = "Q2Q1", n: int = 10, comm: Any = None) -> dict[str, Any]:
+    """Smooth rigid strip footing on Tresca soil (drained, weightless): a locking check.
+
+    Plane-strain slab (one cell thick), half domain ``[0, 5] x [-5, 0] m`` by symmetry,
+    footing half-width 1 m pushed down 5 cm; Mohr–Coulomb with phi = psi = 0, c = 10 kPa
+    (isochoric plastic flow). Prandtl's limit pressure is ``(2 + pi) c`` (Prandtl 1920).
+    Trilinear hexahedra with full integration lock under isochoric flow (no plateau); Q2 does
+    not. Returns the footing pressure over c at 10 displacement levels. Not a pass/fail case:
+    the coarse meshes overestimate the limit (the footing edge is singular).
+    """
+    from pilegroup.constitutive.soil import MohrCoulomb
+    from pilegroup.geometry.box import build_box
+    from pilegroup.solver import (
+        BiotProblem,
+        Discretisation,
+        DisplacementBC,
+        PressureBC,
+        SoilMaterial,
+        Stage,
+        TimeStepping,
+        run_stages,
+    )
+
+    comm = comm or _comm()
+    t0 = time.perf_counter()
+    L, thick, b, c = 5.0, 0.25, 1.0, 10.0
+    md = _with_footing(build_box(comm, (0.0, L), (0.0, thick), np.linspace(-L, 0.0, n + 1),
+                                 n, 1), b)
+    mat = SoilMaterial(MohrCoulomb(E=1e4, nu=0.3, c=c, phi_deg=0.0, psi_deg=0.0), 1e-3, 0.4)
+    pb = BiotProblem(
+        md, {"soil_layer_01": mat}, Discretisation(pair=pair),
+        displacement_bcs=[DisplacementBC("side_xmin", 0), DisplacementBC("side_xmax", 0),
+                          DisplacementBC("side_ymin", 1), DisplacementBC("side_ymax", 1),
+                          DisplacementBC("bottom", 2), DisplacementBC("footing", 2, value=-0.05)],
+        pressure_bcs=[PressureBC(None)], self_weight=False)
+    qc: list[float] = []
+    ts = TimeStepping(dt0=0.05, dt_max=0.05, dt_min=1e-5,
+                      milestones=tuple(np.round(np.arange(0.1, 1.0, 0.1), 12)))
+    log = run_stages(pb, [Stage("push", "load", 1.0, 1.0)], ts,
+                     on_milestone=lambda p, t, s: qc.append(-p.reaction("footing", 2)
+                                                            / (thick * b * c)))
+    return {"pair": pair, "n": n, "dofs": pb.num_dofs, "q_over_c": qc,
+            "prandtl": 2 + math.pi, "newton": log.newton_total, "rejected": log.rejected,
+            "wall_s": time.perf_counter() - t0}
+
+
 def footing_undrained_roughness(pair: str = "Q2Q1", stabilise: bool = True, n: int = 12,
                                 comm: Any = None) -> dict[str, Any]:
     """Checkerboard measure of the undrained pressure under a strip load (inf-sup check).
@@ -414,11 +481,8 @@ def footing_undrained_roughness(pair: str = "Q2Q1", stabilise: bool = True, n: i
     The measure is ``max |p_ij - mean of its 4 neighbours| / max |p|`` over interior vertices
     of the x–z grid: O(h^2) for a smooth field, O(1) for a checkerboard.
     """
-    from dolfinx import mesh as dmesh
-
     from pilegroup.constitutive.soil import LinearElastic
     from pilegroup.geometry.box import build_box
-    from pilegroup.geometry.meshdata import MeshData
     from pilegroup.solver import (
         BiotProblem,
         Discretisation,
@@ -430,17 +494,7 @@ def footing_undrained_roughness(pair: str = "Q2Q1", stabilise: bool = True, n: i
     comm = comm or _comm()
     L, thick = 4.0, 0.25
     md0 = build_box(comm, (0.0, L), (0.0, thick), np.linspace(-L, 0.0, n + 1), n, 1)
-    msh = md0.mesh
-    fdim = msh.topology.dim - 1
-    foot = dmesh.locate_entities_boundary(
-        msh, fdim, lambda x: np.isclose(x[2], 0.0) & (x[0] <= 0.25 * L + 1e-9))
-    idx = np.concatenate([md0.facet_tags.indices, foot])
-    val = np.concatenate([md0.facet_tags.values, np.full(foot.size, 7, dtype=np.int32)])
-    keep = np.ones(idx.size, dtype=bool)
-    keep[: md0.facet_tags.indices.size] = ~np.isin(md0.facet_tags.indices, foot)
-    order = np.argsort(idx[keep], kind="stable")
-    ft = dmesh.meshtags(msh, fdim, idx[keep][order], val[keep][order])
-    md = MeshData(msh, md0.cell_tags, ft, md0.cell_names, {**md0.facet_names, "footing": 7})
+    md = _with_footing(md0, 0.25 * L)
     mat = SoilMaterial(LinearElastic(1.0e4, 0.3), k_m_per_day=1e-3, porosity=0.4)
     pb = BiotProblem(
         md, {"soil_layer_01": mat}, Discretisation(pair=pair, stabilise=stabilise),
