@@ -518,7 +518,8 @@ class BiotProblem:
             for it in range(nw.max_it + 1):
                 self._evaluate_law()
                 if not self.qp.all_finite():
-                    raise ConvergenceError("NaN/inf stress from the constitutive law")
+                    raise ConvergenceError("NaN/inf stress from the constitutive law "
+                                           f"{self.qp.last_error}".rstrip())
                 self._assemble_residual()
                 rn = self._block_norms(self.b)
                 if not np.all(np.isfinite(rn)):

@@ -75,6 +75,7 @@ class QuadratureState:
                 x = np.zeros((0, 3))
             self.groups.append(MaterialPoints(name, mat, cells, dofs, x))
         self.linear = all(_is_linear(g.material.law) for g in self.groups)
+        self.last_error = ""
 
     def initialise(self, stress0: dict[str, np.ndarray | None]) -> None:
         """Set the committed state of each group from ``stress0[name]`` ((n,6) kPa or None)."""
@@ -91,7 +92,15 @@ class QuadratureState:
                 g.state_trial = {k: v.copy() for k, v in g.state_n.items()}
                 continue
             de = self.expr_strain.eval(self.mesh, g.cells).reshape(-1, 6)
-            stress, trial, tangent = g.material.law.update(de, g.state_n, dt)
+            try:
+                stress, trial, tangent = g.material.law.update(de, g.state_n, dt)
+            except (ValueError, ArithmeticError, np.linalg.LinAlgError) as exc:
+                # a failing law on one rank must not desynchronise the ranks: mark it with NaN
+                # and let the collective all_finite() reject the iteration everywhere
+                self.last_error = f"{g.name}: {exc}"
+                stress = np.full((g.n, 6), np.nan)
+                trial = {k: v.copy() for k, v in g.state_n.items()}
+                tangent = np.zeros((g.n, 6, 6))
             g.state_trial = trial
             self._write(g, stress, tangent)
 
@@ -105,8 +114,11 @@ class QuadratureState:
             t[g.dofs] = np.asarray(tangent).reshape(-1, 36)
 
     def all_finite(self) -> bool:
-        """True when every trial stress is finite (local check)."""
-        return bool(np.all(np.isfinite(self.stress.x.array)))
+        """True when every trial stress is finite on every rank (collective)."""
+        from mpi4py import MPI
+
+        ok = bool(np.all(np.isfinite(self.stress.x.array)))
+        return bool(self.mesh.comm.allreduce(ok, op=MPI.LAND))
 
     def commit(self) -> None:
         """Adopt the trial state of every group."""

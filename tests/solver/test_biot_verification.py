@@ -195,3 +195,64 @@ def test_cases_under_mpirun_match_serial():
         for rs, rp in zip(s[c]["details"][key], p[c]["details"][key], strict=True):
             for k, v in rs.items():
                 assert rp[k] == pytest.approx(v, rel=1e-8, abs=1e-9)
+
+
+class FragileElastic:
+    """LinearElastic that fails (NaN) on strain increments above a threshold."""
+
+    def __init__(self, E, nu, max_de):
+        from pilegroup.constitutive.soil import LinearElastic
+
+        self.inner = LinearElastic(E, nu)
+        self.E, self.nu, self.max_de = E, nu, max_de
+        self.linear = False
+        self.failures = 0
+
+    def state_layout(self):
+        return self.inner.state_layout()
+
+    def initial_state(self, n, stress0=None):
+        return self.inner.initial_state(n, stress0)
+
+    def update(self, de, state_n, dt):
+        s, tr, D = self.inner.update(de, state_n, dt)
+        if np.abs(de).max() > self.max_de:
+            self.failures += 1
+            s = np.full_like(s, np.nan)
+        return s, tr, D
+
+
+def test_nan_from_law_is_cut_back_and_rolled_back():
+    from mpi4py import MPI
+
+    from pilegroup.constitutive.soil import LinearElastic
+    from pilegroup.geometry.box import build_box
+    from pilegroup.solver import (
+        BiotProblem,
+        DisplacementBC,
+        PressureBC,
+        SoilMaterial,
+        Stage,
+        SurfaceLoad,
+        run_stages,
+    )
+
+    def run(law, dt0):
+        md = build_box(MPI.COMM_WORLD, (0, 1), (0, 1), np.linspace(-4, 0, 5), 1, 1)
+        pb = BiotProblem(
+            md, {"soil_layer_01": SoilMaterial(law, 1e-3, 0.4)},
+            displacement_bcs=[DisplacementBC("side_xmin", 0), DisplacementBC("side_xmax", 0),
+                              DisplacementBC("side_ymin", 1), DisplacementBC("side_ymax", 1),
+                              DisplacementBC("bottom", 2)],
+            pressure_bcs=[PressureBC(None)], loads=[SurfaceLoad("ground_surface", 100.0)],
+            self_weight=False)
+        log = run_stages(pb, [Stage("ramp", "load", 1.0, 1.0)],
+                         TimeStepping(dt0=dt0, dt_min=1e-4, grow=1.0, cut=0.5))
+        return pb, log
+
+    ref, _ = run(LinearElastic(1e4, 0.3), 1.0)
+    law = FragileElastic(1e4, 0.3, max_de=2.5e-3)  # full load gives ~7.4e-3 strain
+    pb, log = run(law, 1.0)
+    assert law.failures > 0 and log.rejected > 0
+    assert all(s.dt <= 0.25 + 1e-12 for s in log.steps)
+    assert pb.max_displacement() == pytest.approx(ref.max_displacement(), rel=1e-10)
