@@ -246,14 +246,16 @@ class BiotProblem:
         J_up = -dp * ufl.div(v) * dx
         J_pu = ufl.div(du) * q * dx
         em = self._emaps
-        self._F_forms = fem.form([F_u, F_p], entity_maps=em)
-        self._F_u_form = fem.form(F_u, entity_maps=em)
-        self._J_forms = fem.form([[J_uu, J_up], [J_pu, J_pp]], entity_maps=em)
+        jo = dict(self.options.jit_options) if self.options.jit_options is not None else None
+        self._F_forms = fem.form([F_u, F_p], entity_maps=em, jit_options=jo)
+        self._F_u_form = fem.form(F_u, entity_maps=em, jit_options=jo)
+        self._J_forms = fem.form([[J_uu, J_up], [J_pu, J_pp]], entity_maps=em, jit_options=jo)
         preset = get_preset(self.options.preset)
         self._P_forms = None
         if preset.fixed_stress:
             self._P_forms = fem.form(
-                [[J_uu, J_up], [J_pu, J_pp + self._beta * dp * q * dx]], entity_maps=em)
+                [[J_uu, J_up], [J_pu, J_pp + self._beta * dp * q * dx]], entity_maps=em,
+                jit_options=jo)
 
         # --- boundary conditions
         self._bcs = []

@@ -181,12 +181,17 @@ class SolverOptions:
         overrides: extra PETSc options (without prefix), applied after the preset.
         prefix: PETSc options prefix of this problem.
         newton: Newton settings.
+        jit_options: DOLFINx JIT options of the forms and expressions; the default compiles the
+            kernels with ``-O3 -march=native`` (measured 2x faster Q1 and 1.3x faster Q2
+            tangent assembly than DOLFINx's ``-O2``); ``None`` uses DOLFINx's defaults.
     """
 
     preset: str = "direct"
     overrides: Mapping[str, Any] = field(default_factory=dict)
     prefix: str = "biot_"
     newton: NewtonOptions = field(default_factory=NewtonOptions)
+    jit_options: Mapping[str, Any] | None = field(
+        default_factory=lambda: {"cffi_extra_compile_args": ["-O3", "-march=native"]})
 
 
 @dataclass(frozen=True)
