@@ -55,7 +55,7 @@ class XDMFSeries:
                     keys[k] = n
         self.cell_fields = {}
         for k, n in keys.items():
-            name = "effective_stress" if k == "stress" else k
+            name = {"stress": "effective_stress", "eps_p": "plastic_strain"}.get(k, k)
             self.cell_fields[k] = fem.Function(self.T0 if n == 6 else self.S0, name=name)
         with io.XDMFFile(self.comm, str(self.path), "w") as f:
             f.write_mesh(mesh)

@@ -699,10 +699,12 @@ CASES: dict[str, Callable[..., CaseResult]] = {
 
 
 def run_cases(names: Sequence[str] | None = None, size: str = "fast",
-              json: bool = False, out: Any = None) -> list[CaseResult]:
+              json: bool = False, out: Any = None, pair: str | None = None,
+              preset: str | None = None) -> list[CaseResult]:
     """Run the named cases (all when empty); print one line each, or one JSON object each.
 
-    Only rank 0 prints. Returns the results (on every rank).
+    ``pair`` (``"Q2Q1"``/``"Q1Q1"``) and ``preset`` (``"direct"``/``"fieldsplit_gamg"``)
+    override the cases' defaults. Only rank 0 prints. Returns the results (on every rank).
     """
     comm = _comm()
     out = out or sys.stdout
@@ -712,7 +714,12 @@ def run_cases(names: Sequence[str] | None = None, size: str = "fast",
         raise KeyError(f"unknown verification case(s) {unknown}; known: {sorted(CASES)}")
     results = []
     for name in names:
-        res = CASES[name](size=size)
+        kw: dict[str, Any] = {"size": size}
+        if pair is not None:
+            kw["pair"] = pair
+        if preset is not None:
+            kw["preset"] = preset
+        res = CASES[name](**kw)
         results.append(res)
         if comm.rank == 0:
             if json:
@@ -736,8 +743,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     ap.add_argument("cases", nargs="*")
     ap.add_argument("--size", default="fast", choices=["fast", "bench"])
     ap.add_argument("--json", action="store_true")
+    ap.add_argument("--pair", choices=["Q2Q1", "Q1Q1"], default=None)
+    ap.add_argument("--preset", choices=["direct", "fieldsplit_gamg"], default=None)
     a = ap.parse_args(argv)
-    res = run_cases(a.cases, size=a.size, json=a.json)
+    res = run_cases(a.cases, size=a.size, json=a.json, pair=a.pair, preset=a.preset)
     return 0 if all(r.passed for r in res) else 1
 
 

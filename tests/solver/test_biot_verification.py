@@ -178,23 +178,29 @@ def _json_lines(out):
 
 
 @pytest.mark.mpi
-def test_cases_under_mpirun_match_serial():
-    cases = ["terzaghi", "mandel", "triaxial"]
+@pytest.mark.parametrize("cases,extra,err_abs", [
+    (["terzaghi", "mandel", "triaxial"], [], 0.0),
+    # iterative solver: the solution agrees to 1e-8 relative (measured 2e-9); the error
+    # measures, differences of nearly equal numbers, agree to 1e-8 absolute
+    (["mandel", "triaxial"], ["--pair", "Q1Q1", "--preset", "fieldsplit_gamg"], 1e-8),
+])
+def test_cases_under_mpirun_match_serial(cases, extra, err_abs):
     py = sys.executable
     mpirun = str(Path(py).parent / "mpirun")
-    cmd = ["-m", "pilegroup.studies.verification", *cases, "--json"]
+    cmd = ["-m", "pilegroup.studies.verification", *cases, "--json", *extra]
     serial = subprocess.run([py, *cmd], capture_output=True, text=True, cwd=ROOT, timeout=900)
     par = subprocess.run([mpirun, "-n", "2", py, *cmd], capture_output=True, text=True,
                          cwd=ROOT, timeout=900)
     assert par.returncode == 0, par.stderr[-2000:]
     s, p = _json_lines(serial.stdout), _json_lines(par.stdout)
     for c in cases:
-        assert p[c]["passed"] and p[c]["details"]["ranks"] == 2
-        assert p[c]["error"] == pytest.approx(s[c]["error"], rel=1e-8)
-        key = "rows"
-        for rs, rp in zip(s[c]["details"][key], p[c]["details"][key], strict=True):
+        assert s[c]["passed"] and p[c]["passed"] and p[c]["details"]["ranks"] == 2
+        # errors at round-off (triaxial: ~1e-15) are compared in absolute terms
+        assert p[c]["error"] == pytest.approx(s[c]["error"], rel=1e-8, abs=max(err_abs, 1e-12))
+        for rs, rp in zip(s[c]["details"]["rows"], p[c]["details"]["rows"], strict=True):
             for k, v in rs.items():
-                assert rp[k] == pytest.approx(v, rel=1e-8, abs=1e-9)
+                tol_abs = max(err_abs, 1e-12) if k.startswith("err") else 1e-12
+                assert rp[k] == pytest.approx(v, rel=1e-8, abs=tol_abs), (c, k)
 
 
 class FragileElastic:

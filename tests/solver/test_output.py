@@ -55,7 +55,7 @@ def test_staged_run_writes_xdmf_and_summary(tmp_path):
     assert s["conventions"]["stress"] == "tension positive"
     assert _times(tmp_path / "results.xdmf") == [0.0, 1.0, 5.0, 11.0]
     names = {a.get("Name") for a in ET.parse(tmp_path / "results.xdmf").getroot().iter("Attribute")}
-    assert {"displacement", "excess_pore_pressure", "effective_stress", "eps_p"} <= names
+    assert {"displacement", "excess_pore_pressure", "effective_stress", "plastic_strain"} <= names
     assert (tmp_path / "results.h5").stat().st_size > 0
     assert not list(tmp_path.glob("*.tmp"))
 
