@@ -517,22 +517,14 @@ class BiotProblem:
         self._apply_bc_values()
         self._fields_to_x(self.x)
         try:
+            rn, g_plate = self._state_residual(load_factor)
             for it in range(nw.max_it + 1):
-                self._evaluate_law()
-                if not self.qp.all_finite():
-                    raise ConvergenceError("NaN/inf stress from the constitutive law "
-                                           f"{self.qp.last_error}".rstrip())
-                self._assemble_residual()
-                rn = self._block_norms(self.b)
-                if not np.all(np.isfinite(rn)):
-                    raise ConvergenceError("NaN residual")
-                g_plate = 0.0
-                if plate is not None:
-                    g_plate = self._resultant(plate["owned"]) - plate["spec"].force * load_factor
                 info.residuals.append((float(rn[0]), float(rn[1])))
                 if it == 0:
                     ref = np.maximum(ref, rn)
-                    self._R_run = np.maximum(self._R_run, rn)
+                    if plate is not None:  # the plate force is a load not in the residual
+                        ref[0] = max(ref[0], abs(plate["spec"].force * load_factor))
+                    self._R_run = np.maximum(self._R_run, ref)
                 ok_res = np.all(rn <= nw.rtol * ref + nw.atol)
                 if plate is not None:
                     fscale = max(abs(plate["spec"].force * load_factor), 1e-30)
@@ -545,16 +537,39 @@ class BiotProblem:
                     break
                 self._assemble_matrix()
                 info.ksp_its += self._solve(self.b, self.dx_vec)
-                if plate is not None:
-                    self._border_plate(load_factor)
+                dU = self._border_plate(load_factor) if plate is not None else 0.0
                 dxn = self._block_norms(self.dx_vec)
                 if not np.all(np.isfinite(dxn)):
                     raise ConvergenceError("NaN Newton increment")
                 xn = self._block_norms(self.x)
-                self.x.axpy(-1.0, self.dx_vec)
-                self._x_to_fields(self.x)
                 ok_inc = bool(np.all(dxn <= nw.stol * np.maximum(xn, 1e-300)))
                 info.newton_its = it + 1
+                # backtracking line search on the scaled residual (only acts when it grows)
+                scale = np.maximum(ref, nw.atol)
+                gscale = max(abs(plate["spec"].force * load_factor), nw.atol) \
+                    if plate is not None else 1.0
+                m0 = float(np.sum(rn / scale)) + abs(g_plate) / gscale
+                x_old = self.x.copy()
+                U_old = self.plate_U - dU
+                alpha = 1.0
+                for ls in range(nw.line_search + 1):
+                    self.x.array[:] = x_old.array_r
+                    self.x.axpy(-alpha, self.dx_vec)
+                    if plate is not None:
+                        self.plate_U = U_old + alpha * dU
+                        plate["U"].value = self.plate_U
+                    self._x_to_fields(self.x)
+                    try:
+                        rn, g_plate = self._state_residual(load_factor)
+                        m1 = float(np.sum(rn / scale)) + abs(g_plate) / gscale
+                    except ConvergenceError:
+                        if ls == nw.line_search:
+                            raise
+                        m1 = np.inf
+                    if m1 <= (1.0 - 1e-4 * alpha) * m0 or ls == nw.line_search:
+                        break
+                    alpha *= 0.5
+                x_old.destroy()
         except ConvergenceError as exc:
             info.converged = False
             info.message = str(exc)
@@ -564,7 +579,22 @@ class BiotProblem:
         info.seconds = time.perf_counter() - t_start
         return info
 
-    def _border_plate(self, load_factor: float) -> None:
+    def _state_residual(self, load_factor: float) -> tuple[np.ndarray, float]:
+        """Evaluate the laws and the residual at the current fields: (block norms, plate gap)."""
+        self._evaluate_law()
+        if not self.qp.all_finite():
+            raise ConvergenceError("NaN/inf stress from the constitutive law "
+                                   f"{self.qp.last_error}".rstrip())
+        self._assemble_residual()
+        rn = self._block_norms(self.b)
+        if not np.all(np.isfinite(rn)):
+            raise ConvergenceError("NaN residual")
+        g = 0.0
+        if self._plate is not None:
+            g = self._resultant(self._plate["owned"]) - self._plate["spec"].force * load_factor
+        return rn, g
+
+    def _border_plate(self, load_factor: float) -> float:
         """Rigid-plate bordering: correct dx so that the plate resultant equals its force.
 
         ``dx = dx_a + dU * dx_b`` where ``dx_a`` solves with the plate held, ``dx_b`` is the
@@ -610,6 +640,7 @@ class BiotProblem:
         self.plate_U += dU
         plate["U"].value = self.plate_U
         self._x_to_fields(x0)
+        return dU
 
     def _bcs_by_block_J(self, bcs: Any) -> Any:
         from dolfinx import fem

@@ -163,12 +163,16 @@ class NewtonOptions:
         stol: relative increment tolerance (alternative acceptance when the residual has
             reached round-off).
         max_it: iteration limit; beyond it the step fails (and is cut back).
+        line_search: maximum number of step halvings of the backtracking line search on the
+            scaled residual norm (0: plain Newton); it only acts when a full step does not
+            decrease the residual (e.g. return-mapping branch cycling in perfect plasticity).
     """
 
     rtol: float = 1e-9
     atol: float = 1e-12
     stol: float = 1e-12
     max_it: int = 15
+    line_search: int = 4
 
 
 @dataclass(frozen=True)

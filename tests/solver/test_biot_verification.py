@@ -262,3 +262,20 @@ def test_nan_from_law_is_cut_back_and_rolled_back():
     assert law.failures > 0 and log.rejected > 0
     assert all(s.dt <= 0.25 + 1e-12 for s in log.steps)
     assert pb.max_displacement() == pytest.approx(ref.max_displacement(), rel=1e-10)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ["terzaghi", "mandel", "triaxial"])
+def test_cases_at_bench_size(name):
+    r = ver.CASES[name](size="bench")
+    assert r.passed, (r.error, r.tolerance)
+
+
+@pytest.mark.slow
+def test_strip_footing_q2_plateau_and_q1_locking():
+    q2 = ver.strip_footing("Q2Q1", 10)["q_over_c"]
+    q1 = ver.strip_footing("Q1Q1", 10)["q_over_c"]
+    prandtl = 2 + np.pi
+    assert abs(q2[-1] - q2[-2]) < 0.01 * q2[-1]  # plateau
+    assert prandtl < q2[-1] < 1.2 * prandtl  # coarse mesh overestimates
+    assert q1[-1] > 1.35 * prandtl and q1[-1] - q1[-2] > 0.02 * q1[-1]  # locking: no plateau
