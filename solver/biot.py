@@ -249,6 +249,7 @@ class BiotProblem:
         jo = dict(self.options.jit_options) if self.options.jit_options is not None else None
         self._F_forms = fem.form([F_u, F_p], entity_maps=em, jit_options=jo)
         self._F_u_form = fem.form(F_u, entity_maps=em, jit_options=jo)
+        self._Fint_form = fem.form(ufl.inner(sig, eps_mandel(v)) * dxq, jit_options=jo)
         self._J_forms = fem.form([[J_uu, J_up], [J_pu, J_pp]], entity_maps=em, jit_options=jo)
         preset = get_preset(self.options.preset)
         self._P_forms = None
@@ -522,7 +523,10 @@ class BiotProblem:
                 info.residuals.append((float(rn[0]), float(rn[1])))
                 if it == 0:
                     ref = np.maximum(ref, rn)
-                    if plate is not None:  # the plate force is a load not in the residual
+                    # force scale of the u block: the internal force of the current stress
+                    # (includes the geostatic state) and the plate force (not in the residual)
+                    ref[0] = max(ref[0], self._internal_force_norm())
+                    if plate is not None:
                         ref[0] = max(ref[0], abs(plate["spec"].force * load_factor))
                     self._R_run = np.maximum(self._R_run, ref)
                 ok_res = np.all(rn <= nw.rtol * ref + nw.atol)
@@ -578,6 +582,17 @@ class BiotProblem:
             info.message = f"PETSc error {exc}"
         info.seconds = time.perf_counter() - t_start
         return info
+
+    def _internal_force_norm(self) -> float:
+        """Euclidean norm (kN) of the assembled internal force ``int sigma' : eps(v)``."""
+        from dolfinx import fem, la
+        from mpi4py import MPI
+
+        vec = fem.assemble_vector(self._Fint_form)
+        vec.scatter_reverse(la.InsertMode.add)
+        n = self.V.dofmap.index_map.size_local * 3
+        loc = float(vec.array[:n] @ vec.array[:n])
+        return float(np.sqrt(self.comm.allreduce(loc, op=MPI.SUM)))
 
     def _state_residual(self, load_factor: float) -> tuple[np.ndarray, float]:
         """Evaluate the laws and the residual at the current fields: (block norms, plate gap)."""
