@@ -18,7 +18,7 @@ from pilegroup.model.errors import ScenarioError
 from pilegroup.model.scenario import Scenario
 
 #: Scenarios shipped with the package (``pilegroup scenario show NAME``).
-BUNDLED = ("pier667",)
+BUNDLED = ("pier667", "single_pile")
 
 
 

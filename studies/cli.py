@@ -62,6 +62,47 @@ def _cmd_run(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_mesh(args: argparse.Namespace) -> int:
+    from mpi4py import MPI
+
+    from pilegroup.geometry.adapter import geometry_spec
+    from pilegroup.geometry.output import format_summary, mesh_command
+
+    sc = load_scenario(args.scenario)
+    out = Path(args.out) if args.out else Path("out") / sc.name / "mesh"
+    summary = mesh_command(geometry_spec(sc, args.mesh_size), None, out, MPI.COMM_WORLD,
+                           cache_dir=False if args.no_cache else None, render=not args.no_png)
+    if _world_rank() == 0:
+        print(format_summary(summary))
+    return 0
+
+
+def _cmd_verify(args: argparse.Namespace) -> int:
+    from pilegroup.studies.verification import CASES, run_cases
+
+    unknown = [c for c in args.cases if c not in CASES]
+    if unknown:
+        raise ScenarioError("CASE", unknown[0], f"unknown case; known: {', '.join(CASES)}")
+    res = run_cases(args.cases, size=args.size, json=args.json, pair=args.pair,
+                    preset=args.preset)
+    return 0 if all(r.passed for r in res) else EXIT_FAILED
+
+
+def _cmd_bench(args: argparse.Namespace) -> int:
+    if args.what == "constitutive":
+        from pilegroup.constitutive.bench import main as bench_main
+
+        return bench_main([])
+    if args.what == "meshing":
+        from pilegroup.geometry.bench import main as bench_main
+
+        return bench_main([str(h) for h in args.sizes] if args.sizes else [])
+    from pilegroup.studies.verification import bench_verification
+
+    bench_verification(out_dir=args.out or "out/bench_verification")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``pilegroup`` command."""
     p = argparse.ArgumentParser(
@@ -99,6 +140,45 @@ def build_parser() -> argparse.ArgumentParser:
     pr.add_argument("--mesh-size", type=float, default=None, metavar="H",
                     help="element size at the pile surfaces in m (overrides numerics.mesh.size_m)")
     pr.set_defaults(func=_cmd_run)
+
+    pm = sub.add_parser("mesh", help="build the all-hexahedral mesh of a scenario",
+                        description="Mesh the scenario with gmsh (cap, piles, layered soil; "
+                        "plan quads extruded through the layers), write mesh.xdmf with cell and "
+                        "facet tags (ParaView), mesh_summary.json, plan.png and cutaway.png, and "
+                        "print counts and quality. Meshes are cached by their parameters "
+                        "($PILEGROUP_MESH_CACHE or ~/.cache/pilegroup/meshes).")
+    pm.add_argument("scenario", help="scenario TOML file or bundled name, e.g. pier667")
+    pm.add_argument("--mesh-size", type=float, default=None, metavar="H",
+                    help="element size at the pile surfaces in m (paper: 1.0/0.8/0.6/0.3/0.1)")
+    pm.add_argument("--out", help="output folder (default: out/<scenario>/mesh)")
+    pm.add_argument("--no-cache", action="store_true", help="re-mesh even if cached")
+    pm.add_argument("--no-png", action="store_true", help="skip the PNG renders")
+    pm.set_defaults(func=_cmd_mesh)
+
+    pv = sub.add_parser("verify", help="run verification cases against closed forms",
+                        description="Run verification cases through the real pipeline and "
+                        "print error, tolerance and pass/fail per case (exit 1 if any fails). "
+                        "Cases: terzaghi (1D consolidation), mandel (Mandel-Cryer effect), "
+                        "triaxial (Mohr-Coulomb failure load). Works under mpirun -n 2.")
+    pv.add_argument("cases", nargs="*", metavar="CASE", help="cases to run (default: all)")
+    pv.add_argument("--json", action="store_true", help="one JSON object per case")
+    pv.add_argument("--size", choices=["fast", "bench"], default="fast",
+                    help="fast: small meshes (test tier); bench: benchmark sizes")
+    pv.add_argument("--pair", choices=["Q2Q1", "Q1Q1"], default=None,
+                    help="element pair (default: each case's own)")
+    pv.add_argument("--preset", choices=["direct", "fieldsplit_gamg"], default=None,
+                    help="linear solver option set (default: each case's own)")
+    pv.set_defaults(func=_cmd_verify)
+
+    pb = sub.add_parser("bench", help="benchmarks that print tables (not tests)",
+                        description="constitutive: law updates per second; meshing: cells, "
+                        "quality and time for the paper's five mesh sizes; verification: run "
+                        "time against error for Terzaghi and Mandel (table, JSON and PNG).")
+    pb.add_argument("what", choices=["constitutive", "meshing", "verification"])
+    pb.add_argument("--sizes", type=float, nargs="*", default=None, metavar="H",
+                    help="meshing: pile-surface sizes in m (default: the paper's five)")
+    pb.add_argument("--out", default=None, help="verification: output folder")
+    pb.set_defaults(func=_cmd_bench)
     return p
 
 

@@ -17,19 +17,32 @@ log = logging.getLogger(__name__)
 def run_scenario(sc: Scenario, out: Path, mesh_size: float | None = None) -> dict[str, Any]:
     """Run scenario ``sc`` and write its outputs to ``out``; returns the summary.
 
-    Today: validate, write the resolved scenario (``scenario.json``) and ``summary.json``.
+    Stages that exist today: validate, write the resolved scenario (``scenario.json``), mesh
+    (``mesh/``: XDMF with tags, PNG renders, counts and quality), ``summary.json``.
     """
+    from mpi4py import MPI
+
+    from pilegroup.geometry.adapter import geometry_spec
+    from pilegroup.geometry.output import mesh_command
+
     t0 = time.perf_counter()
     if mesh_size is not None:
         sc = dataclasses.replace(sc, numerics=dataclasses.replace(
             sc.numerics, mesh=dataclasses.replace(sc.numerics.mesh, size_m=mesh_size)))
-    out.mkdir(parents=True, exist_ok=True)
-    write_json_atomic(out / "scenario.json", sc)
+    comm = MPI.COMM_WORLD
+    if comm.rank == 0:
+        out.mkdir(parents=True, exist_ok=True)
+        write_json_atomic(out / "scenario.json", sc)
+    mesh = mesh_command(geometry_spec(sc), None, out / "mesh", comm)
     summary: dict[str, Any] = {
         "scenario": sc.name,
-        "stages_done": ["validate"],
+        "stages_done": ["validate", "mesh"],
+        "mesh": {k: mesh[k] for k in ("h_m", "cells", "vertices", "min_scaled_jacobian",
+                                      "shaft_groups", "files")},
+        "ranks": comm.size,
         "wall_s": time.perf_counter() - t0,
     }
-    write_json_atomic(out / "summary.json", summary)
-    log.info("wrote %s", out / "summary.json")
+    if comm.rank == 0:
+        write_json_atomic(out / "summary.json", summary)
+        log.info("wrote %s", out / "summary.json")
     return summary
