@@ -223,7 +223,7 @@ class BiotProblem:
         nrm = ufl.FacetNormal(mesh)
         F_u = ufl.inner(sig, eps_mandel(v)) * dxq - p * ufl.div(v) * dx
         if self_weight:
-            F_u += self._gam * v[2] * dx
+            F_u += self._gam * v[2] * dxq  # every cell: solids carry their buoyant weight too
         self._load_consts = []
         for ld in self.loads:
             c = fem.Constant(mesh, default_scalar_type(0.0))
