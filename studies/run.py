@@ -23,7 +23,9 @@ def run_scenario(sc: Scenario, out: Path, mesh_size: float | None = None) -> dic
     from mpi4py import MPI
 
     from pilegroup.geometry.adapter import geometry_spec
+    from pilegroup.geometry.convert import build_mesh
     from pilegroup.geometry.output import mesh_command
+    from pilegroup.studies.pier import run_coupled
 
     t0 = time.perf_counter()
     if mesh_size is not None:
@@ -33,10 +35,14 @@ def run_scenario(sc: Scenario, out: Path, mesh_size: float | None = None) -> dic
     if comm.rank == 0:
         out.mkdir(parents=True, exist_ok=True)
         write_json_atomic(out / "scenario.json", sc)
-    mesh = mesh_command(geometry_spec(sc), None, out / "mesh", comm)
+    spec = geometry_spec(sc)
+    mesh = mesh_command(spec, None, out / "mesh", comm)
+    md = build_mesh(spec, comm)
+    solved = run_coupled(sc, md, out)
     summary: dict[str, Any] = {
         "scenario": sc.name,
-        "stages_done": ["validate", "mesh"],
+        "stages_done": ["validate", "mesh"] + [st.name for st in sc.stages],
+        "solver": solved,
         "mesh": {k: mesh[k] for k in ("h_m", "cells", "vertices", "min_scaled_jacobian",
                                       "shaft_groups", "files")},
         "ranks": comm.size,

@@ -1,0 +1,201 @@
+"""A scenario as a coupled Biot problem: materials, boundaries, loads, stages, outputs.
+
+The one place that maps :class:`~pilegroup.model.Scenario` onto the solver's inputs. The piles
+and cap are elastic solids; in this version they are tied to the soil (one displacement field;
+``interface.mode = "tied"``), which also bonds the cap bottom to the ground surface.
+Boundaries (design.md section 4): bottom fixed, sides roller, ground surface drained (p = 0);
+every other boundary impermeable. The cap load is a uniform pressure on the cap top (or on the
+pile heads when there is no cap).
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import time
+from pathlib import Path
+from typing import Any
+
+from pilegroup.fileio import write_json_atomic
+from pilegroup.model import Scenario, ScenarioError
+
+log = logging.getLogger(__name__)
+
+#: Below this many unknowns the ``auto`` preset uses the direct solver (MUMPS).
+DIRECT_MAX_DOFS = 150_000
+
+
+def soil_law(sc: Scenario, j: int) -> Any:
+    """The constitutive law of soil layer ``j`` (kPa, degrees) by ``soil.model``."""
+    from pilegroup.constitutive.soil import DruckerPrager, LinearElastic, MohrCoulomb
+
+    lay = sc.layers[j]
+    if sc.soil.model == "linear_elastic":
+        return LinearElastic(lay.E, lay.nu)
+    cls = MohrCoulomb if sc.soil.model == "mohr_coulomb" else DruckerPrager
+    return cls(lay.E, lay.nu, lay.c_kPa, lay.phi_deg, lay.psi_deg)
+
+
+def build_problem(sc: Scenario, md: Any, preset: str | None = None) -> Any:
+    """The :class:`~pilegroup.solver.biot.BiotProblem` of scenario ``sc`` on mesh ``md``."""
+    from pilegroup.solver import (
+        BiotProblem,
+        Discretisation,
+        DisplacementBC,
+        ElasticSolid,
+        PressureBC,
+        SoilMaterial,
+        SolverOptions,
+        SurfaceLoad,
+    )
+
+    if sc.interface.mode != "tied":
+        log.warning("interface.mode = %r: the interface law is not coupled yet in the 3D "
+                    "model; piles are tied to the soil", sc.interface.mode)
+    if sc.site.water_table_depth_m != 0.0:
+        raise ScenarioError("site.water_table_depth_m", sc.site.water_table_depth_m,
+                            "only 0 (water table at the ground surface) is supported so far", "m")
+    materials: dict[str, Any] = {}
+    for j, lay in enumerate(sc.layers):
+        materials[f"soil_layer_{j + 1:02d}"] = SoilMaterial(
+            soil_law(sc, j), lay.k_m_per_day, lay.porosity, lay.gamma_kN_per_m3, K0=lay.K0)
+    solid = ElasticSolid(sc.structure.E, sc.structure.nu)
+    for name in md.cell_names:
+        if name.startswith("pile_") or name == "cap":
+            materials[name] = solid
+    dbcs = [DisplacementBC("side_xmin", 0), DisplacementBC("side_xmax", 0),
+            DisplacementBC("side_ymin", 1), DisplacementBC("side_ymax", 1)]
+    dbcs += [DisplacementBC("bottom", c) for c in range(3)]
+    load_facets = ["cap_top"] if sc.cap is not None else [
+        n for n in md.facet_names if n.startswith("head_p")]
+    area = (sc.cap.size_x_m * sc.cap.size_y_m if sc.cap is not None
+            else sc.piles.count * math.pi * sc.piles.diameter_m ** 2 / 4)
+    # The polygonal pile heads are slightly smaller than the circle: use the meshed area so the
+    # resultant is exactly the scenario's load.
+    area = _facet_area(md, load_facets) if sc.cap is None else area
+    q = sc.total_cap_load() / area
+    loads = [SurfaceLoad(f, q) for f in load_facets]
+    disc = Discretisation(sc.numerics.element)
+    p = preset or sc.numerics.solver.preset
+    if p == "auto":
+        p = "direct" if estimate_dofs(md, sc.numerics.element) <= DIRECT_MAX_DOFS \
+            else "fieldsplit_gamg"
+    opts = SolverOptions(preset=p, overrides=dict(sc.numerics.solver.options))
+    return BiotProblem(md, materials, disc, displacement_bcs=dbcs,
+                       pressure_bcs=[PressureBC("ground_surface")], loads=loads, options=opts)
+
+
+def _facet_area(md: Any, names: list[str]) -> float:
+    import ufl
+    from dolfinx import fem
+
+    ds = ufl.Measure("ds", domain=md.mesh, subdomain_data=md.facet_tags)
+    form = sum((1.0 * ds(md.facet_tag(n)) for n in names), start=0.0 * ds)
+    from mpi4py import MPI
+
+    return md.mesh.comm.allreduce(fem.assemble_scalar(fem.form(form)), op=MPI.SUM)
+
+
+def estimate_dofs(md: Any, element: str) -> int:
+    """Rough global unknown count of the u-p problem (vertices, or Q2 nodes ~ 8 x vertices)."""
+    nv = md.mesh.topology.index_map(0).size_global
+    return int(nv * (3 * (8 if element == "Q2Q1" else 1) + 1))
+
+
+def solver_stages(sc: Scenario) -> list[Any]:
+    """The scenario's stages as solver stages (load factor 1 = the full cap load)."""
+    from pilegroup.solver import Stage
+
+    out = []
+    total = sc.total_cap_load()
+    for st, t0, t1 in sc.stage_times():
+        if st.kind == "geostatic":
+            out.append(Stage(st.name, "geostatic"))
+        elif st.kind == "load":
+            lf = st.cap_load_kN / total if total > 0 else 0.0  # type: ignore[operator]
+            out.append(Stage(st.name, "load", duration=t1 - t0, load_factor=lf))
+        else:
+            out.append(Stage(st.name, "consolidation", duration=t1 - t0))
+    return out
+
+
+def time_stepping(sc: Scenario) -> Any:
+    """The solver's adaptive stepping rules from ``numerics.time`` and ``time.output_days``."""
+    from pilegroup.solver import TimeStepping
+
+    t = sc.numerics.time
+    return TimeStepping(dt0=t.dt_initial_day, dt_min=t.dt_min_day, dt_max=t.dt_max_day,
+                        grow=t.grow_factor, cut=t.cut_factor, easy_newton=t.easy_newton,
+                        milestones=tuple(x for x in sc.time.output_days if x > 0))
+
+
+class SettlementProbe:
+    """Mean vertical displacement (m, down positive) of the loaded top (cap top or pile heads)."""
+
+    def __init__(self, pb: Any, md: Any, names: list[str]) -> None:
+        import ufl
+        from dolfinx import fem
+        from mpi4py import MPI
+
+        ds = ufl.Measure("ds", domain=md.mesh, subdomain_data=md.facet_tags)
+        dA = sum((ds(md.facet_tag(n)) for n in names[1:]), start=ds(md.facet_tag(names[0])))
+        self._num = fem.form(-pb.u[2] * dA)
+        self._area = md.mesh.comm.allreduce(
+            fem.assemble_scalar(fem.form(1.0 * dA)), op=MPI.SUM)
+        self._comm = md.mesh.comm
+        self._fem = fem
+        self._sum = MPI.SUM
+
+    def __call__(self) -> float:
+        """Current settlement, m (down positive), all-reduced."""
+        val = self._fem.assemble_scalar(self._num)
+        return self._comm.allreduce(val, op=self._sum) / self._area
+
+
+def run_coupled(sc: Scenario, md: Any, out: Path, preset: str | None = None) -> dict[str, Any]:
+    """Run every stage of ``sc`` on ``md``; write results.xdmf, settlement CSV and summary.
+
+    Returns the summary (also written as ``out/summary_solver.json``, atomically, at every
+    output time with ``complete: false`` until the end).
+    """
+    from pilegroup.solver.output import XDMFSeries
+    from pilegroup.solver.stepping import run_stages
+
+    t0 = time.perf_counter()
+    pb = build_problem(sc, md, preset)
+    names = ["cap_top"] if sc.cap is not None else [
+        n for n in md.facet_names if n.startswith("head_p")]
+    probe = SettlementProbe(pb, md, names)
+    series = XDMFSeries(pb, out / "results.xdmf") if sc.outputs.xdmf else None
+    history: list[tuple[float, str, float]] = []
+    comm = md.mesh.comm
+
+    def summary(complete: bool) -> dict[str, Any]:
+        return {"complete": complete, "dofs": pb.num_dofs,
+                "element": sc.numerics.element, "preset": pb.options.preset,
+                "settlement_m": [{"t_day": t, "stage": s, "settlement_m": w}
+                                 for t, s, w in history],
+                "settlement_sign": "positive = downward (compression-positive habit)",
+                "wall_s": time.perf_counter() - t0}
+
+    def on_milestone(problem: Any, t: float, stage: str) -> None:
+        history.append((t, stage, probe()))
+        if series is not None:
+            series.write(t)
+        if comm.rank == 0:
+            write_json_atomic(out / "summary_solver.json", summary(False))
+            lines = ["t_day,stage,settlement_m"] + [f"{a:.6g},{b},{c:.9g}" for a, b, c in history]
+            (out / "settlement.csv.tmp").write_text("\n".join(lines) + "\n")
+            (out / "settlement.csv.tmp").replace(out / "settlement.csv")
+
+    run_log = run_stages(pb, solver_stages(sc), time_stepping(sc), on_milestone=on_milestone)
+    if series is not None:
+        series.close()
+    data = summary(True)
+    data.update({"steps": len(run_log.steps), "rejected_steps": run_log.rejected,
+                 "newton_total": run_log.newton_total,
+                 "geostatic_max_u_m": run_log.geostatic_max_u,
+                 "timings_s": dict(pb.timings)})
+    if comm.rank == 0:
+        write_json_atomic(out / "summary_solver.json", data)
+    return data
