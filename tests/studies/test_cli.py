@@ -12,6 +12,24 @@ from pilegroup.studies.cli import build_parser, main
 BIN = Path(sys.executable).parent
 
 
+def small_pile(tmp_path: Path) -> str:
+    """The bundled single_pile scenario, coarsened for the fast test tier (same physics)."""
+    from pilegroup.model import bundled_text
+
+    text = bundled_text("single_pile")
+    for old, new in [("size_m = 0.5", "size_m = 1.0\nn_circ_min = 8"),
+                     ("far_field_size_m = 4.0", "far_field_size_m = 8.0"),
+                     ("dz_max_m = 2.0", "dz_max_m = 4.0\ndz_surface_m = 2.0\ndz_toe_m = 2.0"),
+                     ("dz_max_deep_m = 4.0", "dz_max_deep_m = 8.0"),
+                     ("end_day = 10.0", "end_day = 2.0"),
+                     ("output_days = [0.0, 0.5, 10.0]", "output_days = [0.0, 0.5, 2.0]")]:
+        assert old in text, old
+        text = text.replace(old, new)
+    f = tmp_path / "small_pile.toml"
+    f.write_text(text)
+    return str(f)
+
+
 @pytest.mark.parametrize("argv", [[], ["scenario"], ["scenario", "show"], ["scenario", "validate"],
                                   ["run"], ["mesh"], ["verify"], ["bench"]])
 def test_every_command_has_help(argv, capsys):
@@ -29,14 +47,20 @@ def test_verify_rejects_unknown_case(capsys):
 
 def test_mesh_and_run_single_pile(tmp_path, monkeypatch):
     monkeypatch.setenv("PILEGROUP_MESH_CACHE", str(tmp_path / "cache"))
-    assert main(["mesh", "single_pile", "--out", str(tmp_path / "m"), "--no-png"]) == 0
+    assert main(["mesh", small_pile(tmp_path), "--out", str(tmp_path / "m"), "--no-png"]) == 0
     s = json.loads((tmp_path / "m" / "mesh_summary.json").read_text())
-    assert s["cells"] > 1000 and s["min_scaled_jacobian"] > 0.2 and s["shaft_groups"] == 2
+    assert s["cells"] > 100 and s["min_scaled_jacobian"] > 0.2 and s["shaft_groups"] == 2
     assert (tmp_path / "m" / "mesh.xdmf").is_file()
-    assert main(["run", "single_pile", "--out", str(tmp_path / "r")]) == 0
+    assert main(["run", small_pile(tmp_path), "--out", str(tmp_path / "r")]) == 0
     summary = json.loads((tmp_path / "r" / "summary.json").read_text())
     assert summary["mesh"]["cells"] == s["cells"]
     assert json.loads((tmp_path / "r" / "scenario.json").read_text())["name"] == "single_pile"
+    hist = summary["solver"]["settlement_m"]
+    assert [h["t_day"] for h in hist] == [0.0, 0.5, 2.0]
+    # the pile settles under load and keeps settling while the soil consolidates
+    assert 0 < hist[1]["settlement_m"] < hist[2]["settlement_m"]
+    assert summary["solver"]["geostatic_max_u_m"] < 1e-9
+    assert (tmp_path / "r" / "results.xdmf").is_file()
 
 
 @pytest.mark.mpi
@@ -49,10 +73,14 @@ def test_run_under_mpirun_gives_serial_mesh(tmp_path):
     for n in (1, 2):
         out = tmp_path / f"r{n}"
         r = subprocess.run([str(BIN / "mpirun"), "-n", str(n), str(BIN / "pilegroup"), "run",
-                            "single_pile", "--out", str(out)], capture_output=True, text=True,
-                           env=env, timeout=600)
+                            small_pile(tmp_path), "--out", str(out)],
+                           capture_output=True, text=True, env=env, timeout=600)
         assert r.returncode == 0, r.stderr[-3000:]
         outs[n] = json.loads((out / "summary.json").read_text())
     assert outs[2]["ranks"] == 2
     assert outs[1]["mesh"]["cells"] == outs[2]["mesh"]["cells"]
     assert outs[1]["mesh"]["vertices"] == outs[2]["mesh"]["vertices"]
+    # the same answer in parallel (direct solver: to round-off; 1e-8 relative)
+    w1 = [h["settlement_m"] for h in outs[1]["solver"]["settlement_m"]]
+    w2 = [h["settlement_m"] for h in outs[2]["solver"]["settlement_m"]]
+    assert w2 == pytest.approx(w1, rel=1e-8)
