@@ -26,5 +26,17 @@ class ScenarioError(PilegroupError, ValueError):
         super().__init__(f"{key} = {shown}{unit_txt}: {allowed}")
 
 
-class ConvergenceError(PilegroupError, RuntimeError):
-    """A nonlinear or linear solve did not converge and could not be recovered by cut-back."""
+class SolverError(PilegroupError, RuntimeError):
+    """Base class of the solver's errors (a run failed: the CLI exits with code 1)."""
+
+
+class SolverInputError(SolverError, ValueError):
+    """An input of the solver is invalid; the message names the field, value, unit and range."""
+
+
+class ConvergenceError(SolverError):
+    """Newton or the linear solver failed (diverged, NaN, iteration limit)."""
+
+
+class StepFailure(SolverError):
+    """The adaptive stepper could not complete a step even at the minimum step size."""

@@ -1,19 +1,5 @@
-"""Exceptions raised by :mod:`pilegroup.solver`."""
+"""Exceptions raised by :mod:`pilegroup.solver` (defined with all others in model.errors)."""
 
-from __future__ import annotations
+from pilegroup.model.errors import ConvergenceError, SolverError, SolverInputError, StepFailure
 
-
-class SolverError(RuntimeError):
-    """Base class of the solver's errors."""
-
-
-class SolverInputError(SolverError, ValueError):
-    """An input of the solver is invalid; the message names the field, value, unit and range."""
-
-
-class ConvergenceError(SolverError):
-    """Newton or the linear solver failed (diverged, NaN, iteration limit)."""
-
-
-class StepFailure(SolverError):
-    """The adaptive stepper could not complete a step even at the minimum step size."""
+__all__ = ["ConvergenceError", "SolverError", "SolverInputError", "StepFailure"]
