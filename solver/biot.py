@@ -254,8 +254,11 @@ class BiotProblem:
         preset = get_preset(self.options.preset)
         self._P_forms = None
         if preset.fixed_stress:
+            # P = J + (fixed-stress mass) on the p block, built as J + M_beta (one axpy)
+            self._zero = fem.Constant(mesh, default_scalar_type(0.0))
+            zero_uu = self._zero * ufl.inner(du, v) * dx
             self._P_forms = fem.form(
-                [[J_uu, J_up], [J_pu, J_pp + self._beta * dp * q * dx]], entity_maps=em,
+                [[zero_uu, None], [None, self._beta * dp * q * dx]], entity_maps=em,
                 jit_options=jo)
 
         # --- boundary conditions
@@ -304,7 +307,10 @@ class BiotProblem:
 
         # --- PETSc objects (created once; sparsity reused)
         self.A = fpetsc.create_matrix(self._J_forms)
-        self.P = fpetsc.create_matrix(self._P_forms) if self._P_forms is not None else None
+        self.P = None
+        self._Mbeta = None
+        if self._P_forms is not None:
+            self._Mbeta = fpetsc.create_matrix(self._P_forms)
         spaces = fem.extract_function_spaces(self._F_forms)
         self.b = fpetsc.create_vector(spaces)
         self.x = fpetsc.create_vector(spaces)
@@ -456,10 +462,17 @@ class BiotProblem:
         self.A.zeroEntries()
         fpetsc.assemble_matrix(self.A, self._J_forms, bcs=bcs, diag=1.0)
         self.A.assemble()
-        if self.P is not None:
-            self.P.zeroEntries()
-            fpetsc.assemble_matrix(self.P, self._P_forms, bcs=bcs, diag=1.0)
-            self.P.assemble()
+        if self._Mbeta is not None:
+            from petsc4py import PETSc
+
+            self._Mbeta.zeroEntries()
+            fpetsc.assemble_matrix(self._Mbeta, self._P_forms, bcs=bcs, diag=0.0)
+            self._Mbeta.assemble()
+            if self.P is None:
+                self.P = self.A.duplicate(copy=True)
+            else:
+                self.A.copy(self.P, structure=PETSc.Mat.Structure.SAME_NONZERO_PATTERN)
+            self.P.axpy(1.0, self._Mbeta, structure=PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
         self.ksp.setOperators(self.A, self.P if self.P is not None else self.A)
         self._matrix_key = key
         if self._plate is not None:
