@@ -209,10 +209,15 @@ class BiotProblem:
         self.load_factor = 0.0
         qdeg = disc.quadrature_degree
         dxq = ufl.Measure("dx", domain=mesh, metadata={"quadrature_degree": qdeg})
+        # Every other term is integrated with the same Gauss rule (2 * u_degree: exact on
+        # affine cells for Q2-Q1 and Q1-Q1 products); UFL's estimate for hexahedra (from the
+        # total degree of the tensor-product spaces) would use up to 8x more points.
+        md_q = {"quadrature_degree": qdeg}
         if self.has_solids:  # pressure terms on the soil cells only
-            dx = ufl.Measure("dx", domain=mesh, subdomain_data=md.cell_tags)(self.soil_tags)
+            dx = ufl.Measure("dx", domain=mesh, subdomain_data=md.cell_tags,
+                             metadata=md_q)(self.soil_tags)
         else:
-            dx = ufl.Measure("dx", domain=mesh)
+            dx = ufl.Measure("dx", domain=mesh, metadata=md_q)
         ds = ufl.Measure("ds", domain=mesh, subdomain_data=md.facet_tags)
         self.qp = QuadratureState(mesh, groups, qdeg, eps_mandel(self.u) - eps_mandel(self.u_n))
         sig, Dt = self.qp.stress, self.qp.tangent
