@@ -56,7 +56,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
 
     sc = load_scenario(args.scenario)
     out = Path(args.out) if args.out else Path("out") / sc.name
-    summary = run_scenario(sc, out, mesh_size=args.mesh_size)
+    summary = run_scenario(sc, out, mesh_size=args.mesh_size, stop_after=args.stop_after)
     if _world_rank() == 0:
         print(json.dumps(summary, indent=2))
     return 0
@@ -139,6 +139,9 @@ def build_parser() -> argparse.ArgumentParser:
     pr.add_argument("--out", help="output folder (default: out/<scenario name>)")
     pr.add_argument("--mesh-size", type=float, default=None, metavar="H",
                     help="element size at the pile surfaces in m (overrides numerics.mesh.size_m)")
+    pr.add_argument("--stop-after", choices=["mesh", "solve"], default="solve",
+                    help="mesh: validate and mesh only (writes scenario.json, mesh/ and "
+                    "summary.json); solve (default): run every stage")
     pr.set_defaults(func=_cmd_run)
 
     pm = sub.add_parser("mesh", help="build the all-hexahedral mesh of a scenario",

@@ -14,7 +14,8 @@ from pilegroup.model import Scenario
 log = logging.getLogger(__name__)
 
 
-def run_scenario(sc: Scenario, out: Path, mesh_size: float | None = None) -> dict[str, Any]:
+def run_scenario(sc: Scenario, out: Path, mesh_size: float | None = None,
+                 stop_after: str = "solve") -> dict[str, Any]:
     """Run scenario ``sc`` and write its outputs to ``out``; returns the summary.
 
     Stages that exist today: validate, write the resolved scenario (``scenario.json``), mesh
@@ -37,11 +38,13 @@ def run_scenario(sc: Scenario, out: Path, mesh_size: float | None = None) -> dic
         write_json_atomic(out / "scenario.json", sc)
     spec = geometry_spec(sc)
     mesh = mesh_command(spec, None, out / "mesh", comm)
-    md = build_mesh(spec, comm)
-    solved = run_coupled(sc, md, out)
+    solved: dict[str, Any] | None = None
+    if stop_after == "solve":
+        md = build_mesh(spec, comm)
+        solved = run_coupled(sc, md, out)
     summary: dict[str, Any] = {
         "scenario": sc.name,
-        "stages_done": ["validate", "mesh"] + [st.name for st in sc.stages],
+        "stages_done": ["validate", "mesh"] + ([st.name for st in sc.stages] if solved else []),
         "solver": solved,
         "mesh": {k: mesh[k] for k in ("h_m", "cells", "vertices", "min_scaled_jacobian",
                                       "shaft_groups", "files")},

@@ -84,3 +84,12 @@ def test_run_under_mpirun_gives_serial_mesh(tmp_path):
     w1 = [h["settlement_m"] for h in outs[1]["solver"]["settlement_m"]]
     w2 = [h["settlement_m"] for h in outs[2]["solver"]["settlement_m"]]
     assert w2 == pytest.approx(w1, rel=1e-8)
+
+
+def test_run_stop_after_mesh(tmp_path, monkeypatch):
+    monkeypatch.setenv("PILEGROUP_MESH_CACHE", str(tmp_path / "cache"))
+    assert main(["run", small_pile(tmp_path), "--out", str(tmp_path / "r"),
+                 "--stop-after", "mesh"]) == 0
+    summary = json.loads((tmp_path / "r" / "summary.json").read_text())
+    assert summary["stages_done"] == ["validate", "mesh"] and summary["solver"] is None
+    assert not (tmp_path / "r" / "results.xdmf").exists()
