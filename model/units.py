@@ -7,12 +7,11 @@ module holds the one set of conversion factors used by ``model`` to turn them in
 KPA_PER_MPA = 1000.0
 KPA_PER_GPA = 1.0e6
 SECONDS_PER_DAY = 86400.0
-#: Unit weight of water used for Darcy flow and hydrostatics (kN/m^3). The paper's r_w = 10.
-GAMMA_WATER = 10.0
+#: Unit weight of water for Darcy flow and hydrostatics (kN/m^3). (The paper's r_w = 10 kN/m^3
+#: of the Clough-Duncan hyperbola is a parameter of the interface law, not this constant.)
+GAMMA_WATER = 9.81
 #: Bulk modulus of pore water (kPa), design.md section 4.
 K_WATER = 2.2e6
-#: Atmospheric pressure of the Clough-Duncan hyperbola (kPa), paper Section 5.
-P_ATM = 101.0
 #: Standard gravity (m/s^2) to turn densities (kg/m^3) into unit weights (kN/m^3).
 G = 9.81
 

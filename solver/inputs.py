@@ -11,13 +11,12 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
+from pilegroup.model.units import GAMMA_WATER, K_WATER
 from pilegroup.solver.errors import SolverInputError
 
-#: Unit weight of water, kN/m^3. Darcy's law is written ``q = -(k / GAMMA_W) grad p`` with the
-#: hydraulic conductivity ``k`` in m/day, so ``k / GAMMA_W`` is in m^2/(kPa day).
-GAMMA_W = 9.81
-#: Bulk modulus of pore water, kPa (2.2 GPa).
-K_WATER = 2.2e6
+#: Unit weight of water, kN/m^3 (model.units). Darcy's law is written ``q = -(k / GAMMA_W) grad p``
+#: with the hydraulic conductivity ``k`` in m/day, so ``k / GAMMA_W`` is in m^2/(kPa day).
+GAMMA_W = GAMMA_WATER
 
 
 def _positive(name: str, value: float, unit: str, allow_zero: bool = False) -> None:

@@ -12,8 +12,6 @@ scalars are all-reduced over ``mesh.comm`` first.
 
 from __future__ import annotations
 
-import json
-import os
 import time
 from pathlib import Path
 from typing import Any
@@ -21,6 +19,7 @@ from typing import Any
 import numpy as np
 
 from pilegroup.constitutive.base import mandel_to_tensor
+from pilegroup.fileio import write_json_atomic
 
 
 class XDMFSeries:
@@ -103,11 +102,7 @@ class XDMFSeries:
 def write_summary(path: str | Path, data: dict[str, Any], comm: Any) -> None:
     """Write ``data`` as JSON on rank 0 (atomic rename); every rank returns after it."""
     if comm.rank == 0:
-        p = Path(path)
-        p.parent.mkdir(parents=True, exist_ok=True)
-        tmp = p.with_suffix(p.suffix + ".tmp")
-        tmp.write_text(json.dumps(data, indent=2, default=_jsonable))
-        os.replace(tmp, p)
+        write_json_atomic(path, data)
     comm.barrier()
 
 
@@ -145,14 +140,6 @@ def run_summary(problem: Any, log: Any, extra: dict[str, Any] | None = None) -> 
     }
     out.update(extra or {})
     return out
-
-
-def _jsonable(o: Any) -> Any:
-    if isinstance(o, np.generic):
-        return o.item()
-    if isinstance(o, np.ndarray):
-        return o.tolist()
-    return str(o)
 
 
 def run_and_write(problem: Any, stages: Any, ts: Any, out_dir: str | Path,

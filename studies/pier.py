@@ -16,7 +16,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from pilegroup.fileio import write_json_atomic
+from pilegroup.fileio import write_json_atomic, write_text_atomic
 from pilegroup.model import Scenario, ScenarioError
 
 log = logging.getLogger(__name__)
@@ -185,8 +185,7 @@ def run_coupled(sc: Scenario, md: Any, out: Path, preset: str | None = None) -> 
         if comm.rank == 0:
             write_json_atomic(out / "summary_solver.json", summary(False))
             lines = ["t_day,stage,settlement_m"] + [f"{a:.6g},{b},{c:.9g}" for a, b, c in history]
-            (out / "settlement.csv.tmp").write_text("\n".join(lines) + "\n")
-            (out / "settlement.csv.tmp").replace(out / "settlement.csv")
+            write_text_atomic(out / "settlement.csv", "\n".join(lines) + "\n")
 
     run_log = run_stages(pb, solver_stages(sc), time_stepping(sc), on_milestone=on_milestone)
     if series is not None:

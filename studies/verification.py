@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 
 import pilegroup  # noqa: F401  (dolfinx_solver before dolfinx)
+from pilegroup.fileio import json_default
 
 __all__ = ["CASES", "CaseResult", "bench_markdown", "bench_verification", "main",
            "mandel", "mandel_centre_pressure", "run_cases", "terzaghi", "terzaghi_series",
@@ -728,18 +729,10 @@ def run_cases(names: Sequence[str] | None = None, size: str = "fast",
         results.append(res)
         if comm.rank == 0:
             if json:
-                print(_json.dumps(asdict(res), default=_jsonable), file=out, flush=True)
+                print(_json.dumps(asdict(res), default=json_default), file=out, flush=True)
             else:
                 print(res.line(), file=out, flush=True)
     return results
-
-
-def _jsonable(o: Any) -> Any:
-    if isinstance(o, np.generic):
-        return o.item()
-    if isinstance(o, np.ndarray):
-        return o.tolist()
-    return str(o)
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -13,14 +13,13 @@ from pathlib import Path
 from typing import Any
 
 
-def _default(obj: Any) -> Any:
+def json_default(obj: Any) -> Any:
+    """``json.dumps(default=...)``: dataclasses, numpy scalars and arrays, paths, else ``str``."""
     if dataclasses.is_dataclass(obj) and not isinstance(obj, type):
         return dataclasses.asdict(obj)
     if hasattr(obj, "tolist"):
         return obj.tolist()
-    if isinstance(obj, Path):
-        return str(obj)
-    raise TypeError(f"not JSON serialisable: {type(obj).__name__}")
+    return str(obj)
 
 
 def write_text_atomic(path: str | Path, text: str) -> Path:
@@ -40,4 +39,4 @@ def write_text_atomic(path: str | Path, text: str) -> Path:
 
 def write_json_atomic(path: str | Path, data: Any) -> Path:
     """Write ``data`` as indented JSON (dataclasses and numpy arrays allowed), atomically."""
-    return write_text_atomic(path, json.dumps(data, indent=2, default=_default) + "\n")
+    return write_text_atomic(path, json.dumps(data, indent=2, default=json_default) + "\n")
