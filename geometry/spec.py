@@ -18,7 +18,12 @@ import math
 from dataclasses import asdict, dataclass, field, replace
 from typing import Any
 
-from pilegroup.model.errors import ScenarioError
+from pilegroup.model.errors import (
+    ScenarioError,
+    require_finite,
+    require_non_negative,
+    require_positive,
+)
 
 __all__ = [
     "BlockSpec",
@@ -50,20 +55,15 @@ _REL = 1e-9  # relative tolerance for geometric coincidence checks
 
 
 def _finite(key: str, value: float, unit: str = "m") -> None:
-    if not isinstance(value, int | float) or not math.isfinite(value):
-        raise ScenarioError(key, value, "must be a finite number", unit)
+    require_finite(key, value, unit)
 
 
 def _positive(key: str, value: float, unit: str = "m") -> None:
-    _finite(key, value, unit)
-    if value <= 0.0:
-        raise ScenarioError(key, value, "must be > 0", unit)
+    require_positive(key, value, unit)
 
 
 def _non_negative(key: str, value: float, unit: str = "m") -> None:
-    _finite(key, value, unit)
-    if value < 0.0:
-        raise ScenarioError(key, value, "must be >= 0", unit)
+    require_non_negative(key, value, unit)
 
 
 @dataclass(frozen=True)

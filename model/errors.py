@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 
@@ -24,6 +25,26 @@ class ScenarioError(PilegroupError, ValueError):
         shown = repr(value) if isinstance(value, str) else value
         unit_txt = f" ({unit})" if unit else ""
         super().__init__(f"{key} = {shown}{unit_txt}: {allowed}")
+
+
+def require_finite(key: str, value: Any, unit: str = "") -> None:
+    """Raise :class:`ScenarioError` unless ``value`` is a finite real number."""
+    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
+        raise ScenarioError(key, value, "must be a finite number", unit)
+
+
+def require_positive(key: str, value: Any, unit: str = "") -> None:
+    """Raise :class:`ScenarioError` unless ``value`` is a finite number > 0."""
+    require_finite(key, value, unit)
+    if value <= 0.0:
+        raise ScenarioError(key, value, "must be a finite number > 0", unit)
+
+
+def require_non_negative(key: str, value: Any, unit: str = "") -> None:
+    """Raise :class:`ScenarioError` unless ``value`` is a finite number >= 0."""
+    require_finite(key, value, unit)
+    if value < 0.0:
+        raise ScenarioError(key, value, "must be a finite number >= 0", unit)
 
 
 class SolverError(PilegroupError, RuntimeError):

@@ -13,18 +13,11 @@ import math
 from dataclasses import dataclass, field
 from typing import Literal
 
-from pilegroup.model.errors import ScenarioError
+from pilegroup.model.errors import ScenarioError, require_non_negative, require_positive
 from pilegroup.model.units import KPA_PER_MPA, unit_weight_from_density
 
-
-def _positive(key: str, value: float, unit: str) -> None:
-    if not value > 0.0 or not math.isfinite(value):
-        raise ScenarioError(key, value, "must be a finite number > 0", unit)
-
-
-def _non_negative(key: str, value: float, unit: str) -> None:
-    if not value >= 0.0 or not math.isfinite(value):
-        raise ScenarioError(key, value, "must be a finite number >= 0", unit)
+_positive = require_positive
+_non_negative = require_non_negative
 
 
 def _in_open(key: str, value: float, lo: float, hi: float, unit: str) -> None:
