@@ -80,12 +80,14 @@ class AdaptiveStepper:
         stage: str = "",
         milestones: Sequence[float] = (),
         on_milestone: Callback | None = None,
+        on_step: Callback | None = None,
     ) -> float:
         """Advance from ``t0`` to ``t1`` (day); returns ``t1``.
 
         ``load_factor(t)`` gives the load factor at time ``t``; ``on_milestone(problem, t,
         stage)`` is called after the accepted step that lands on each milestone in
-        ``(t0, t1]`` (``t1`` included).
+        ``(t0, t1]`` (``t1`` included); ``on_step(problem, t, stage)`` after every accepted step
+        (e.g. a progress bar).
         """
         ts = self.ts
         marks = sorted({float(m) for m in (*milestones, *ts.milestones) if t0 < m < t1} | {t1})
@@ -112,6 +114,8 @@ class AdaptiveStepper:
                 self.log.steps.append(StepRecord(stage, t_new, dt, load_factor(t_new),
                                                  info.newton_its, info.ksp_its, info.seconds))
                 t = t_new
+                if on_step is not None:
+                    on_step(problem, t, stage)
                 if landing:
                     continue
                 self.dt = dt
@@ -133,6 +137,7 @@ def run_stages(
     ts: TimeStepping,
     on_milestone: Callback | None = None,
     geostatic_tol: float = 1e-6,
+    on_step: Callback | None = None,
 ) -> RunLog:
     """Run the stages in order; returns the :class:`RunLog`.
 
@@ -142,6 +147,7 @@ def run_stages(
         ts: time-stepping rules (milestones in absolute time, day).
         on_milestone: called at stage ends and milestone times (e.g. an output writer).
         geostatic_tol: largest displacement (m) accepted by the geostatic equilibrium check.
+        on_step: called after every accepted time step (collective; e.g. a progress bar).
     """
     log = RunLog()
     stepper = AdaptiveStepper(ts, log)
@@ -190,7 +196,8 @@ def run_stages(
                 return lam1
             return lam0 + (lam1 - lam0) * min(max((tt - t0) / (t1 - t0), 0.0), 1.0)
 
-        t = stepper.advance(problem, t0, t1, lam_of, st.name, on_milestone=on_milestone)
+        t = stepper.advance(problem, t0, t1, lam_of, st.name, on_milestone=on_milestone,
+                            on_step=on_step)
         lam = lam1
     log.wall_s = time.perf_counter() - t_wall
     return log

@@ -187,7 +187,20 @@ def run_coupled(sc: Scenario, md: Any, out: Path, preset: str | None = None) -> 
             lines = ["t_day,stage,settlement_m"] + [f"{a:.6g},{b},{c:.9g}" for a, b, c in history]
             write_text_atomic(out / "settlement.csv", "\n".join(lines) + "\n")
 
-    run_log = run_stages(pb, solver_stages(sc), time_stepping(sc), on_milestone=on_milestone)
+    from tqdm import tqdm
+
+    bar = tqdm(total=sc.time.end_day, unit="day", desc=sc.name, disable=comm.rank != 0,
+               bar_format="{desc}: {n:.3g}/{total:g} day |{bar}| {elapsed}{postfix}")
+
+    def on_step(problem: Any, t: float, stage: str) -> None:
+        bar.n = t
+        bar.set_postfix_str(f"{stage}, settlement {1000 * probe():.2f} mm")
+
+    try:
+        run_log = run_stages(pb, solver_stages(sc), time_stepping(sc),
+                             on_milestone=on_milestone, on_step=on_step)
+    finally:
+        bar.close()
     if series is not None:
         series.close()
     data = summary(True)
