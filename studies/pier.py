@@ -66,15 +66,14 @@ def build_problem(sc: Scenario, md: Any, preset: str | None = None) -> Any:
     dbcs = [DisplacementBC("side_xmin", 0), DisplacementBC("side_xmax", 0),
             DisplacementBC("side_ymin", 1), DisplacementBC("side_ymax", 1)]
     dbcs += [DisplacementBC("bottom", c) for c in range(3)]
-    load_facets = ["cap_top"] if sc.cap is not None else [
-        n for n in md.facet_names if n.startswith("head_p")]
+    names = load_facets(sc, md)
     area = (sc.cap.size_x_m * sc.cap.size_y_m if sc.cap is not None
             else sc.piles.count * math.pi * sc.piles.diameter_m ** 2 / 4)
     # The polygonal pile heads are slightly smaller than the circle: use the meshed area so the
     # resultant is exactly the scenario's load.
-    area = _facet_area(md, load_facets) if sc.cap is None else area
+    area = _facet_area(md, names) if sc.cap is None else area
     q = sc.total_cap_load() / area
-    loads = [SurfaceLoad(f, q) for f in load_facets]
+    loads = [SurfaceLoad(f, q) for f in names]
     disc = Discretisation(sc.numerics.element)
     p = preset or sc.numerics.solver.preset
     if p == "auto":
@@ -83,6 +82,12 @@ def build_problem(sc: Scenario, md: Any, preset: str | None = None) -> Any:
     opts = SolverOptions(preset=p, overrides=dict(sc.numerics.solver.options))
     return BiotProblem(md, materials, disc, displacement_bcs=dbcs,
                        pressure_bcs=[PressureBC("ground_surface")], loads=loads, options=opts)
+
+
+def load_facets(sc: Scenario, md: Any) -> list[str]:
+    """Facet groups that carry the cap load: the cap top, or the pile heads without a cap."""
+    return ["cap_top"] if sc.cap is not None else [
+        n for n in md.facet_names if n.startswith("head_p")]
 
 
 def _facet_area(md: Any, names: list[str]) -> float:
@@ -140,8 +145,7 @@ class SettlementProbe:
         ds = ufl.Measure("ds", domain=md.mesh, subdomain_data=md.facet_tags)
         dA = sum((ds(md.facet_tag(n)) for n in names[1:]), start=ds(md.facet_tag(names[0])))
         self._num = fem.form(-pb.u[2] * dA)
-        self._area = md.mesh.comm.allreduce(
-            fem.assemble_scalar(fem.form(1.0 * dA)), op=MPI.SUM)
+        self._area = _facet_area(md, names)
         self._comm = md.mesh.comm
         self._fem = fem
         self._sum = MPI.SUM
@@ -163,9 +167,7 @@ def run_coupled(sc: Scenario, md: Any, out: Path, preset: str | None = None) -> 
 
     t0 = time.perf_counter()
     pb = build_problem(sc, md, preset)
-    names = ["cap_top"] if sc.cap is not None else [
-        n for n in md.facet_names if n.startswith("head_p")]
-    probe = SettlementProbe(pb, md, names)
+    probe = SettlementProbe(pb, md, load_facets(sc, md))
     series = XDMFSeries(pb, out / "results.xdmf") if sc.outputs.xdmf else None
     history: list[tuple[float, str, float]] = []
     comm = md.mesh.comm
