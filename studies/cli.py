@@ -9,6 +9,7 @@ from __future__ import annotations
 import argparse
 import json
 import logging
+import os
 import sys
 from collections.abc import Sequence
 from pathlib import Path
@@ -103,6 +104,21 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_report(args: argparse.Namespace) -> int:
+    from pilegroup.fileio import write_text_atomic
+    from pilegroup.studies.report import results_markdown, write_report
+
+    out = Path(args.out_dir)
+    paths = write_report(out)
+    for path in paths:
+        print(path)
+    if args.markdown:
+        md = Path(args.markdown)
+        rel = Path(os.path.relpath(out / "plots", md.parent)).as_posix()
+        print(write_text_atomic(md, results_markdown(out, rel)))
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``pilegroup`` command."""
     p = argparse.ArgumentParser(
@@ -182,6 +198,18 @@ def build_parser() -> argparse.ArgumentParser:
                     help="meshing: pile-surface sizes in m (default: the paper's five)")
     pb.add_argument("--out", default=None, help="verification: output folder")
     pb.set_defaults(func=_cmd_bench)
+
+    pp = sub.add_parser("report", help="plots and a Markdown summary of a run's output folder",
+                        description="Read the CSV and JSON files of a finished or interrupted "
+                        "run (settlement.csv, pile_profiles.csv, layer_history.csv, "
+                        "pile_loads.csv, summary.json), write PNG figures to OUT_DIR/plots "
+                        "(figures whose file is missing are skipped) and, with --markdown, a "
+                        "results section. A CSV with a wrong header is invalid input (exit 2).")
+    pp.add_argument("out_dir", metavar="OUT_DIR", help="run output folder, e.g. out/pier667")
+    pp.add_argument("--markdown", metavar="FILE", default=None,
+                    help="also write the results section (Markdown) to FILE; image links are "
+                    "relative to FILE's folder")
+    pp.set_defaults(func=_cmd_report)
     return p
 
 
