@@ -86,6 +86,8 @@ class PileSoilInterface:
         p_floor: floor of the compressive normal stress used in the hyperbola (Eqs. 6–7) so that
             the stiffness stays positive as sigma_n -> 0, kPa (> 0). It does not enter the yield
             function, which uses the actual sigma_n.
+        viscous: ``False`` drops the viscoplastic slip (the "elastic" interface: hyperbolic
+            shear springs and the normal penalty only; no yield surface, no creep).
 
     State (arrays ``(n, k)``): ``traction`` (3, kPa), ``slip_e`` (2, elastic slip, m),
     ``slip_vp`` (2, viscoplastic slip, m), ``gap`` (1, normal opening from the zero-traction
@@ -108,6 +110,7 @@ class PileSoilInterface:
     variant: str = "default"
     integrator: str = "implicit"
     p_floor: float = 1.0
+    viscous: bool = True
 
     def __post_init__(self) -> None:
         inf = math.inf
@@ -281,7 +284,7 @@ class PileSoilInterface:
         slip_e_n = np.where(state_n["detached"] > 0.5, 0.0, state_n["slip_e"])
         slip_vp = state_n["slip_vp"].copy()
 
-        if self.integrator == "explicit":
+        if self.integrator == "explicit" and self.viscous:
             tr_n = state_n["traction"]
             t_old = np.hypot(tr_n[:, 1], tr_n[:, 2])
             F_old, _, _, g_old, _, _ = self._F(t_old, tr_n[:, 0])
@@ -302,7 +305,7 @@ class PileSoilInterface:
         dr_drtr = np.ones(nq)
         dr_dn = np.zeros(nq)
 
-        if self.integrator == "implicit" and dt > 0.0:
+        if self.integrator == "implicit" and self.viscous and dt > 0.0:
             t_tr = r_tr / (a + b * r_tr)
             plastic = contact & pos & (self._F(t_tr, s)[0] > 0.0)
             if np.any(plastic):

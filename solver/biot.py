@@ -42,6 +42,7 @@ from pilegroup.solver.inputs import (
     Discretisation,
     DisplacementBC,
     ElasticSolid,
+    InterfaceCoupling,
     PressureBC,
     RigidPlate,
     SoilMaterial,
@@ -64,6 +65,20 @@ class StepInfo:
     residuals: list[tuple[float, float]] = field(default_factory=list)
     message: str = ""
     seconds: float = 0.0
+
+
+@dataclass
+class Body:
+    """One displacement field: the whole mesh (tied piles) or the soil / the structure."""
+
+    name: str
+    mesh: Any
+    emap: Any  # EntityMap sub-mesh -> parent (None for the parent mesh itself)
+    tags: tuple[int, ...]  # parent cell tags of the body
+    V: Any
+    u: Any
+    u_n: Any
+    qp: QuadratureState
 
 
 def eps_mandel(u: Any) -> Any:
@@ -92,6 +107,9 @@ class BiotProblem:
         plates: rigid plates under force control (at most one).
         options: linear solver and Newton options.
         self_weight: apply the buoyant weight (geostatic stress must then balance it).
+        interface: give piles and cap their own displacement field on the structure sub-mesh,
+            joined to the soil (own field on the soil sub-mesh) only by the zero-thickness
+            interface (:class:`~pilegroup.solver.interface.NodalInterface`); ``None`` ties them.
     """
 
     def __init__(
@@ -105,10 +123,12 @@ class BiotProblem:
         plates: Sequence[RigidPlate] = (),
         options: SolverOptions | None = None,
         self_weight: bool = True,
+        interface: InterfaceCoupling | None = None,
     ) -> None:
         import basix.ufl
         import ufl
         from dolfinx import default_scalar_type, fem
+        from dolfinx import mesh as dmesh
         from dolfinx.fem import petsc as fpetsc
 
         self.md = md
@@ -133,7 +153,6 @@ class BiotProblem:
         # --- cells per material group (owned cells)
         imap = mesh.topology.index_map(tdim)
         n_owned = imap.size_local
-        groups: dict[str, tuple[Any, np.ndarray]] = {}
         covered = np.zeros(n_owned + imap.num_ghosts, dtype=bool)
         soil_cells = []
         for name, mat in self.materials.items():
@@ -145,39 +164,73 @@ class BiotProblem:
             if isinstance(mat, SoilMaterial):
                 soil_cells.append(cells)
             covered[cells] = True
-            groups[name] = (mat, cells[cells < n_owned])
         if not covered[:n_owned].all():
             raise SolverInputError(
                 f"materials cover {int(covered[:n_owned].sum())} of {n_owned} owned cells; "
                 f"cell groups: {sorted(md.cell_names)}"
             )
+        self.soil_tags = tuple(md.cell_tag(nm) for nm, m in self.materials.items()
+                               if isinstance(m, SoilMaterial))
+        self.solid_tags = tuple(md.cell_tag(nm) for nm, m in self.materials.items()
+                                if not isinstance(m, SoilMaterial))
+        self.has_solids = len(self.solid_tags) > 0
+        self.coupling = interface
+        if interface is not None and not (self.has_solids and self.soil_tags):
+            raise SolverInputError("interface coupling needs both solid and soil cell groups")
 
-        # --- spaces and functions
+        # --- bodies: one displacement field on the whole mesh (tied), or soil and structure
+        # on their own sub-meshes joined by the interface terms
         cell = mesh.basix_cell()
         Ve = basix.ufl.element("Lagrange", cell, disc.u_degree, shape=(3,))
         Qe = basix.ufl.element("Lagrange", cell, 1)
-        self.V = V = fem.functionspace(mesh, Ve)
-        self.soil_tags = tuple(md.cell_tag(nm) for nm, m in self.materials.items()
-                               if isinstance(m, SoilMaterial))
-        self.has_solids = len(self.soil_tags) < len(self.materials)
-        self.p_mesh = mesh
-        self._emaps: list[Any] | None = None
-        self._vmap = None
-        if self.has_solids:
-            from dolfinx import mesh as dmesh
+        qdeg = disc.quadrature_degree
+        self.split = None
+        if interface is None:
+            specs = [("all", mesh, None, self.soil_tags + self.solid_tags)]
+            if self.has_solids:
+                sc = np.unique(np.concatenate(soil_cells)).astype(np.int32)
+                self.p_mesh, p_emap, self._vmap, _ = dmesh.create_submesh(mesh, tdim, sc)
+                self._emaps: list[Any] | None = [p_emap]
+            else:
+                self.p_mesh, self._vmap, self._emaps = mesh, None, None
+        else:
+            from pilegroup.solver.interface import split_bodies
 
-            sc = np.unique(np.concatenate(soil_cells)).astype(np.int32)
-            self.p_mesh, emap, self._vmap, _ = dmesh.create_submesh(mesh, tdim, sc)
-            self._emaps = [emap]
+            self.split = split = split_bodies(md)
+            specs = [("soil", split.soil, split.soil_map, self.soil_tags),
+                     ("structure", split.structure, split.structure_map, self.solid_tags)]
+            self.p_mesh, self._vmap = split.soil, split.soil_vertex_map
+            self._emaps = [split.soil_map, split.structure_map]
+        self.bodies: list[Body] = []
+        for bname, bmesh, emap, tags in specs:
+            V = fem.functionspace(bmesh, Ve)
+            u = fem.Function(V, name=f"displacement_{bname}" if bname != "all"
+                             else "displacement")
+            u_n = fem.Function(V)
+            groups: dict[str, tuple[Any, np.ndarray]] = {}
+            for name, mat in self.materials.items():
+                if md.cell_tag(name) not in tags:
+                    continue
+                cells = md.cell_tags.find(md.cell_tag(name))
+                cells = cells[cells < n_owned]
+                if emap is not None:
+                    cells = emap.sub_topology_to_topology(cells, inverse=True).astype(np.int32)
+                groups[name] = (mat, cells)
+            qp = QuadratureState(bmesh, groups, qdeg, eps_mandel(u) - eps_mandel(u_n))
+            self.bodies.append(Body(bname, bmesh, emap, tags, V, u, u_n, qp))
+        self.V, self.u, self.u_n = self.bodies[0].V, self.bodies[0].u, self.bodies[0].u_n
+        self.qp = self.bodies[0].qp  # soil (or all) quadrature state
         self.Q = Q = fem.functionspace(self.p_mesh, Qe)
-        self.u = fem.Function(V, name="displacement")
         self.p = fem.Function(Q, name="excess_pore_pressure")
-        self.u_n = fem.Function(V)
         self.p_n = fem.Function(Q)
-        self.fields = [self.u, self.p]
-        self.fields_n = [self.u_n, self.p_n]
+        # block order: [u (soil or all), p, u_structure]
+        self.fields = [self.u, self.p] + [b.u for b in self.bodies[1:]]
+        self.fields_n = [self.u_n, self.p_n] + [b.u_n for b in self.bodies[1:]]
+        self._u_blocks = [0] + list(range(2, len(self.fields)))
+        self._block_body = {0: self.bodies[0], **{i + 1: b for i, b in
+                                                  enumerate(self.bodies) if i > 0}}
 
-        # --- material coefficients (DG0)
+        # --- material coefficients (DG0 on the parent mesh)
         D0 = fem.functionspace(mesh, ("DG", 0))
         self._S = fem.Function(D0)
         self._mob = fem.Function(D0)
@@ -196,8 +249,6 @@ class BiotProblem:
             self._beta.x.array[cells] = 1.0 / K
         self._layers = self._soil_layers()
         if self.has_solids:
-            from dolfinx import mesh as dmesh
-
             for name, mat in self.materials.items():
                 if isinstance(mat, SoilMaterial):
                     continue
@@ -207,37 +258,45 @@ class BiotProblem:
 
         self.dt = fem.Constant(mesh, default_scalar_type(0.0))
         self.load_factor = 0.0
-        qdeg = disc.quadrature_degree
-        dxq = ufl.Measure("dx", domain=mesh, metadata={"quadrature_degree": qdeg})
-        # Every other term is integrated with the same Gauss rule (2 * u_degree: exact on
-        # affine cells for Q2-Q1 and Q1-Q1 products); UFL's estimate for hexahedra (from the
-        # total degree of the tensor-product spaces) would use up to 8x more points.
+        # Every term is integrated with the same Gauss rule (2 * u_degree: exact on affine
+        # cells for Q2-Q1 and Q1-Q1 products); UFL's estimate for hexahedra (from the total
+        # degree of the tensor-product spaces) would use up to 8x more points.
         md_q = {"quadrature_degree": qdeg}
-        if self.has_solids:  # pressure terms on the soil cells only
-            dx = ufl.Measure("dx", domain=mesh, subdomain_data=md.cell_tags,
-                             metadata=md_q)(self.soil_tags)
-        else:
-            dx = ufl.Measure("dx", domain=mesh, metadata=md_q)
+        dx_all = ufl.Measure("dx", domain=mesh, subdomain_data=md.cell_tags, metadata=md_q)
+        dx = dx_all(self.soil_tags) if self.has_solids else \
+            ufl.Measure("dx", domain=mesh, metadata=md_q)
         ds = ufl.Measure("ds", domain=mesh, subdomain_data=md.facet_tags)
-        self.qp = QuadratureState(mesh, groups, qdeg, eps_mandel(self.u) - eps_mandel(self.u_n))
-        sig, Dt = self.qp.stress, self.qp.tangent
-
-        u, p, u_n, p_n = self.u, self.p, self.u_n, self.p_n
-        v, q = ufl.TestFunction(V), ufl.TestFunction(Q)
-        du, dp = ufl.TrialFunction(V), ufl.TrialFunction(Q)
         nrm = ufl.FacetNormal(mesh)
-        F_u = ufl.inner(sig, eps_mandel(v)) * dxq - p * ufl.div(v) * dx
-        if self_weight:
-            F_u += self._gam * v[2] * dxq  # every cell: solids carry their buoyant weight too
+        u, p, u_n, p_n = self.u, self.p, self.u_n, self.p_n
+        q, dp = ufl.TestFunction(Q), ufl.TrialFunction(Q)
+        tests = [ufl.TestFunction(b.V) for b in self.bodies]
+        trials = [ufl.TrialFunction(b.V) for b in self.bodies]
+        nb = len(self.fields)
+        F: list[Any] = [None] * nb
+        J: list[list[Any]] = [[None] * nb for _ in range(nb)]
+        self._Fint_forms = []
+        self._facet_body: dict[str, int] = {}
+        for b, v, du in zip(self.bodies, tests, trials, strict=True):
+            i = self._block_of(b)
+            dxb = dx_all(b.tags) if self.has_solids else dx
+            sig, Dt = b.qp.stress, b.qp.tangent
+            F[i] = ufl.inner(sig, eps_mandel(v)) * dxb
+            self._Fint_forms.append(ufl.inner(sig, eps_mandel(v)) * dxb)
+            if self_weight:
+                F[i] += self._gam * v[2] * dxb  # solids carry their buoyant weight too
+            J[i][i] = ufl.inner(ufl.dot(Dt, eps_mandel(du)), eps_mandel(v)) * dxb
+        v0, du0 = tests[0], trials[0]
+        F[0] += -p * ufl.div(v0) * dx
         self._load_consts = []
         for ld in self.loads:
             c = fem.Constant(mesh, default_scalar_type(0.0))
             self._load_consts.append((ld, c))
-            F_u += c * ufl.inner(nrm, v) * ds(md.facet_tag(ld.facet))
+            i = self._block_of(self._body_of_facet(ld.facet))
+            F[i] += c * ufl.inner(nrm, tests[self._body_index(i)]) * ds(md.facet_tag(ld.facet))
         S, mob, dt = self._S, self._mob, self.dt
-        F_p = (S * (p - p_n) + ufl.div(u - u_n)) * q * dx + dt * mob * ufl.inner(
+        F[1] = (S * (p - p_n) + ufl.div(u - u_n)) * q * dx + dt * mob * ufl.inner(
             ufl.grad(p), ufl.grad(q)) * dx
-        J_pp = S * dp * q * dx + dt * mob * ufl.inner(ufl.grad(dp), ufl.grad(q)) * dx
+        J[1][1] = S * dp * q * dx + dt * mob * ufl.inner(ufl.grad(dp), ufl.grad(q)) * dx
         self.stabilised = disc.pair == "Q1Q1" and disc.stabilise
         if self.stabilised:
             sd = dict(subdomain_data=md.cell_tags, subdomain_id=self.soil_tags) \
@@ -245,42 +304,51 @@ class BiotProblem:
             dx_full = ufl.Measure("dx", domain=mesh, metadata={"quadrature_degree": 2}, **sd)
             dx_one = ufl.Measure("dx", domain=mesh, metadata={"quadrature_degree": 1}, **sd)
             tau = self._tau
-            F_p += tau * (p - p_n) * q * dx_full - tau * (p - p_n) * q * dx_one
-            J_pp += tau * dp * q * dx_full - tau * dp * q * dx_one
-        J_uu = ufl.inner(ufl.dot(Dt, eps_mandel(du)), eps_mandel(v)) * dxq
-        J_up = -dp * ufl.div(v) * dx
-        J_pu = ufl.div(du) * q * dx
+            F[1] += tau * (p - p_n) * q * dx_full - tau * (p - p_n) * q * dx_one
+            J[1][1] += tau * dp * q * dx_full - tau * dp * q * dx_one
+        J[0][1] = -dp * ufl.div(v0) * dx
+        J[1][0] = ufl.div(du0) * q * dx
+        self.interface = None
+        if interface is not None:
+            self._add_interface_terms(interface, F, J, tests, trials, dp)
         em = self._emaps
         jo = dict(self.options.jit_options) if self.options.jit_options is not None else None
-        self._F_forms = fem.form([F_u, F_p], entity_maps=em, jit_options=jo)
-        self._F_u_form = fem.form(F_u, entity_maps=em, jit_options=jo)
-        self._Fint_form = fem.form(ufl.inner(sig, eps_mandel(v)) * dxq, jit_options=jo)
-        self._J_forms = fem.form([[J_uu, J_up], [J_pu, J_pp]], entity_maps=em, jit_options=jo)
+        self._F_forms = fem.form(F, entity_maps=em, jit_options=jo)
+        self._F_u_forms = [fem.form(F[self._block_of(b)], entity_maps=em, jit_options=jo)
+                           for b in self.bodies]
+        self._Fint_forms = [fem.form(f, entity_maps=em, jit_options=jo)
+                            for f in self._Fint_forms]
+        self._J_forms = fem.form(J, entity_maps=em, jit_options=jo)
         preset = get_preset(self.options.preset)
         self._P_forms = None
         if preset.fixed_stress:
             # P = J + (fixed-stress mass) on the p block, built as J + M_beta (one axpy)
             self._zero = fem.Constant(mesh, default_scalar_type(0.0))
-            zero_uu = self._zero * ufl.inner(du, v) * dx
-            self._P_forms = fem.form(
-                [[zero_uu, None], [None, self._beta * dp * q * dx]], entity_maps=em,
-                jit_options=jo)
+            P = [[None] * nb for _ in range(nb)]
+            for b, v, du in zip(self.bodies, tests, trials, strict=True):
+                i = self._block_of(b)
+                P[i][i] = self._zero * ufl.inner(du, v) * (dx_all(b.tags) if self.has_solids
+                                                           else dx)
+            P[1][1] = self._beta * dp * q * dx
+            self._P_forms = fem.form(P, entity_maps=em, jit_options=jo)
 
         # --- boundary conditions
         self._bcs = []
         self._bcs_zero = []
         self._drain_bcs: set[int] = set()
         self._u_bc_consts: list[tuple[DisplacementBC, Any]] = []
+        self._bc_targets = []
         for bc in self.displacement_bcs:
             if bc.component not in (0, 1, 2):
                 raise SolverInputError(f"DisplacementBC.component = {bc.component}; allowed 0-2")
-            facets = md.facet_tags.find(md.facet_tag(bc.facet))
-            dofs = fem.locate_dofs_topological(V.sub(bc.component), fdim, facets)
+            b = self._body_of_facet(bc.facet)
+            dofs = self._facet_dofs(b, bc.facet, bc.component)
             c = fem.Constant(mesh, default_scalar_type(0.0))
             self._u_bc_consts.append((bc, c))
-            self._bcs.append(fem.dirichletbc(c, dofs, V.sub(bc.component)))
-            self._bcs_zero.append(fem.dirichletbc(default_scalar_type(0.0), dofs,
-                                                  V.sub(bc.component)))
+            Vc = b.V.sub(bc.component)
+            self._bcs.append(fem.dirichletbc(c, dofs, Vc))
+            self._bc_targets.append((self._bcs[-1], b.u))
+            self._bcs_zero.append(fem.dirichletbc(default_scalar_type(0.0), dofs, Vc))
         for pbc in self.pressure_bcs:
             if pbc.facet is None:
                 qmap = Q.dofmap.index_map
@@ -291,6 +359,7 @@ class BiotProblem:
             bc = fem.dirichletbc(default_scalar_type(pbc.value), dofs, Q)
             bc0 = fem.dirichletbc(default_scalar_type(0.0), dofs, Q)
             self._bcs.append(bc)
+            self._bc_targets.append((bc, self.p))
             self._bcs_zero.append(bc0)
             if pbc.facet is not None and not pbc.in_undrained_steps:
                 self._drain_bcs.update({id(bc), id(bc0)})
@@ -298,17 +367,18 @@ class BiotProblem:
         self._plate = None
         if self.plates:
             pl = self.plates[0]
-            facets = md.facet_tags.find(md.facet_tag(pl.facet))
-            dofs = fem.locate_dofs_topological(V.sub(pl.component), fdim, facets)
+            b = self._body_of_facet(pl.facet)
+            dofs = self._facet_dofs(b, pl.facet, pl.component)
+            Vc = b.V.sub(pl.component)
             cU = fem.Constant(mesh, default_scalar_type(0.0))
             cunit = fem.Constant(mesh, default_scalar_type(-1.0))
-            self._bcs.append(fem.dirichletbc(cU, dofs, V.sub(pl.component)))
-            unit_bc = fem.dirichletbc(cunit, dofs, V.sub(pl.component))
-            owned = dofs[dofs < V.dofmap.index_map.size_local * 3]
+            self._bcs.append(fem.dirichletbc(cU, dofs, Vc))
+            self._bc_targets.append((self._bcs[-1], b.u))
+            unit_bc = fem.dirichletbc(cunit, dofs, Vc)
+            owned = dofs[dofs < b.V.dofmap.index_map.size_local * 3]
             self._plate = {"spec": pl, "U": cU, "unit_bcs": self._bcs_zero + [unit_bc],
-                           "owned": owned, "db": None}
-            self._bcs_zero.append(fem.dirichletbc(default_scalar_type(0.0), dofs,
-                                                  V.sub(pl.component)))
+                           "owned": owned, "db": None, "body": self.bodies.index(b)}
+            self._bcs_zero.append(fem.dirichletbc(default_scalar_type(0.0), dofs, Vc))
 
         # --- PETSc objects (created once; sparsity reused)
         self.A = fpetsc.create_matrix(self._J_forms)
@@ -323,8 +393,6 @@ class BiotProblem:
         self._tmp = fpetsc.create_vector(spaces)
         self._spaces = spaces
         self._undrained = False
-        self._bc_targets = [(bc, self.u if V._cpp_object.contains(bc.function_space) else self.p)
-                            for bc in self._bcs]
         is_u = is_p = nns = None
         if preset.fieldsplit:
             is_u, is_p = self._index_sets()
@@ -332,8 +400,113 @@ class BiotProblem:
         self.ksp = create_ksp(self.comm, self.A, self.P, self.options.prefix,
                               self.options.preset, self.options.overrides, is_u, is_p, nns)
         self._matrix_key: float | None = None  # dt of the assembled matrix (linear reuse)
-        self._R_run = np.zeros(2)
-        self.qp.initialise({})
+        self._R_run = np.zeros(len(self.fields))
+        for b in self.bodies:
+            b.qp.initialise({})
+
+    def _block_of(self, body: Body) -> int:
+        """Block index of a body's displacement (0 for the first body, 2, 3, ... after p)."""
+        i = self.bodies.index(body)
+        return 0 if i == 0 else i + 1
+
+    def _body_index(self, block: int) -> int:
+        return 0 if block == 0 else block - 1
+
+    def _body_of_facet(self, name: str) -> Body:
+        """The body whose cells carry the facet group ``name`` (collective)."""
+        from mpi4py import MPI
+
+        if len(self.bodies) == 1:
+            return self.bodies[0]
+        md = self.md
+        facets = md.facet_tags.find(md.facet_tag(name))
+        f2c = self.mesh.topology.connectivity(self.mesh.topology.dim - 1,
+                                              self.mesh.topology.dim)
+        cells = np.array([f2c.links(f)[0] for f in facets], dtype=np.int32)
+        counts = np.array([int(np.sum(self.split.is_structure[cells] == (b.name == "structure")))
+                           for b in self.bodies])
+        counts = self.comm.allreduce(counts, op=MPI.SUM)
+        return self.bodies[int(np.argmax(counts))]
+
+    def _facet_dofs(self, body: Body, name: str, component: int) -> np.ndarray:
+        """Dofs of ``component`` of ``body``'s displacement on the parent facet group ``name``."""
+        from dolfinx import fem
+
+        fdim = self.mesh.topology.dim - 1
+        facets = self.md.facet_tags.find(self.md.facet_tag(name))
+        if body.emap is not None:
+            facets = self._sub_facets(body, facets)
+        return fem.locate_dofs_topological(body.V.sub(component), fdim, facets)
+
+    def _sub_facets(self, body: Body, facets: np.ndarray) -> np.ndarray:
+        """Parent facets -> facets of ``body``'s sub-mesh (through an adjacent body cell).
+
+        ``create_submesh`` keeps each cell's vertex order, so a facet has the same local index
+        in the parent cell and in its sub-mesh copy.
+        """
+        tdim = self.mesh.topology.dim
+        self.mesh.topology.create_connectivity(tdim, tdim - 1)
+        body.mesh.topology.create_connectivity(tdim, tdim - 1)
+        body.mesh.topology.create_connectivity(tdim - 1, tdim)
+        f2c = self.mesh.topology.connectivity(tdim - 1, tdim)
+        c2f = self.mesh.topology.connectivity(tdim, tdim - 1)
+        sc2f = body.mesh.topology.connectivity(tdim, tdim - 1)
+        out = []
+        for f in facets:
+            for c in f2c.links(f):
+                sc = body.emap.sub_topology_to_topology(np.array([c], dtype=np.int32),
+                                                        inverse=True)[0]
+                if sc >= 0:
+                    lf = int(np.flatnonzero(c2f.links(c) == f)[0])
+                    out.append(sc2f.links(sc)[lf])
+                    break
+        return np.unique(np.array(out, dtype=np.int32))
+
+    def _add_interface_terms(self, coupling: InterfaceCoupling, F: list, J: list,
+                             tests: list, trials: list, dp: Any) -> None:
+        """Interface traction (law + excess pore pressure) between structure and soil.
+
+        The law gives the effective traction ``t'``; the total traction on the pile is
+        ``t' - p n`` (``n`` the structure's outward normal, ``p`` the excess pore pressure on
+        the soil side), so the residuals get ``-int (t' - p n) . v_str`` and
+        ``+int (t' - p n) . v_soil`` over the pile surfaces.
+        """
+        import ufl
+
+        from pilegroup.solver.interface import NodalInterface
+
+        soil, struct = self.bodies
+        traction0 = coupling.traction0 or self._interface_traction0
+        self.interface = itf = NodalInterface(self.md, self.split, struct.V, soil.V,
+                                              list(coupling.laws), traction0)
+        i_s, i_t = self._block_of(soil), self._block_of(struct)
+        v_s, v_t = tests[0], tests[1]
+        du_s, du_t = trials[0], trials[1]
+        r_t, r_s = itf.residual_forms(v_t, v_s)
+        n = ufl.FacetNormal(self.mesh)("+")
+        dS = itf.dS(1) + itf.dS(2)
+        F[i_t] += r_t + self.p("-") * ufl.inner(n, v_t("+")) * dS
+        F[i_s] += r_s - self.p("-") * ufl.inner(n, v_s("-")) * dS
+        Ji = itf.jacobian_forms(du_t, du_s, v_t, v_s)
+        J[i_t][i_t] += Ji[0][0]
+        J[i_t][i_s] = Ji[0][1]
+        J[i_s][i_t] = Ji[1][0]
+        J[i_s][i_s] += Ji[1][1]
+        J[i_s][1] += -dp("-") * ufl.inner(n, v_s("-")) * dS
+        J[i_t][1] = dp("-") * ufl.inner(n, v_t("+")) * dS
+
+    def _interface_traction0(self, z: np.ndarray, m: int) -> np.ndarray:
+        """In-situ local traction of interface group ``m`` at heights ``z`` (kPa)."""
+        L = self.split.n_layers
+        sv = self._sigma_v(z)
+        t = np.zeros((z.size, 3))
+        if m < L:
+            mat = self.materials.get(f"soil_layer_{m + 1:02d}")
+            k0 = mat.k0 if isinstance(mat, SoilMaterial) else self._layer_value(z, 3)
+            t[:, 0] = k0 * sv
+        else:
+            t[:, 0] = sv
+        return t
 
     # ------------------------------------------------------------------ sizes and helpers
     def _pressure_dofs_on(self, facets: np.ndarray) -> np.ndarray:
@@ -355,16 +528,18 @@ class BiotProblem:
     @property
     def num_dofs(self) -> int:
         """Global number of unknowns (u and p)."""
-        return int(self.V.dofmap.index_map.size_global * 3 + self.Q.dofmap.index_map.size_global)
+        return int(sum(b.V.dofmap.index_map.size_global * 3 for b in self.bodies)
+                   + self.Q.dofmap.index_map.size_global)
 
     def _index_sets(self) -> tuple[Any, Any]:
         from petsc4py import PETSc
 
-        nu = self.V.dofmap.index_map.size_local * 3
-        npr = self.Q.dofmap.index_map.size_local
-        r0 = self.A.getOwnershipRange()[0]
-        is_u = PETSc.IS().createStride(nu, first=r0, step=1, comm=self.comm)
-        is_p = PETSc.IS().createStride(npr, first=r0 + nu, step=1, comm=self.comm)
+        sizes = [f.function_space.dofmap.index_map.size_local
+                 * f.function_space.dofmap.index_map_bs for f in self.fields]
+        offs = self.A.getOwnershipRange()[0] + np.concatenate([[0], np.cumsum(sizes)])
+        u_rows = np.concatenate([np.arange(offs[i], offs[i + 1]) for i in self._u_blocks])
+        is_u = PETSc.IS().createGeneral(u_rows.astype(PETSc.IntType), comm=self.comm)
+        is_p = PETSc.IS().createStride(sizes[1], first=int(offs[1]), step=1, comm=self.comm)
         is_u.setBlockSize(3)
         return is_u, is_p
 
@@ -373,11 +548,11 @@ class BiotProblem:
         from dolfinx import la
         from petsc4py import PETSc
 
-        V = self.V
-        imap = V.dofmap.index_map
-        nloc = imap.size_local
+        x = np.concatenate([b.V.tabulate_dof_coordinates()[:b.V.dofmap.index_map.size_local]
+                            for b in self.bodies])
+        nloc = x.shape[0]
+        imap = _local_index_map(self.comm, nloc)
         basis = [la.vector(imap, bs=3, dtype=PETSc.ScalarType) for _ in range(6)]
-        x = V.tabulate_dof_coordinates()[:nloc]
         b = [v.array.reshape(-1, 3) for v in basis]
         for i in range(3):
             b[i][:nloc, i] = 1.0
@@ -415,7 +590,8 @@ class BiotProblem:
     def _block_norms(self, vec: Any) -> np.ndarray:
         off0, _ = vec.getAttr("_blocks")
         a = vec.array_r
-        loc = np.array([float(a[off0[i]:off0[i + 1]] @ a[off0[i]:off0[i + 1]]) for i in (0, 1)])
+        loc = np.array([float(a[off0[i]:off0[i + 1]] @ a[off0[i]:off0[i + 1]])
+                        for i in range(len(self.fields))])
         from mpi4py import MPI
 
         return np.sqrt(self.comm.allreduce(loc, op=MPI.SUM))
@@ -423,7 +599,11 @@ class BiotProblem:
     # ------------------------------------------------------------------ assembly
     def _evaluate_law(self) -> None:
         t0 = time.perf_counter()
-        self.qp.evaluate(float(self.dt.value))
+        dt = float(self.dt.value)
+        for b in self.bodies:
+            b.qp.evaluate(dt)
+        if self.interface is not None:
+            self.interface.update(self.bodies[1].u, self.bodies[0].u, dt)
         self.timings["law"] += time.perf_counter() - t0
 
     def _active(self, bcs: list) -> list:
@@ -461,7 +641,7 @@ class BiotProblem:
 
         key = float(self.dt.value)
         bcs = self._active(self._bcs)
-        if self.qp.linear and self._matrix_key == key:
+        if self._linear() and self._matrix_key == key:
             return False
         t0 = time.perf_counter()
         self.A.zeroEntries()
@@ -499,19 +679,24 @@ class BiotProblem:
         state: the reaction of the constraint, ``int sigma_total . n`` over the facets (tension
         positive).
         """
-        from dolfinx import fem
+        b = self._body_of_facet(facet)
+        dofs = self._facet_dofs(b, facet, component)
+        owned = dofs[dofs < b.V.dofmap.index_map.size_local * 3]
+        return self._resultant(owned, self.bodies.index(b))
 
-        fdim = self.mesh.topology.dim - 1
-        facets = self.md.facet_tags.find(self.md.facet_tag(facet))
-        dofs = fem.locate_dofs_topological(self.V.sub(component), fdim, facets)
-        owned = dofs[dofs < self.V.dofmap.index_map.size_local * 3]
-        return self._resultant(owned)
+    def _linear(self) -> bool:
+        """Linear problem: every law linear (interface laws declare ``linear = True``)."""
+        lin = all(b.qp.linear for b in self.bodies)
+        if self.interface is not None:
+            lin = lin and all(getattr(g["law"], "linear", False) for g in self.interface.groups
+                              if g["law"] is not None)
+        return lin
 
-    def _resultant(self, owned: np.ndarray) -> float:
+    def _resultant(self, owned: np.ndarray, body: int = 0) -> float:
         from dolfinx import fem, la
         from mpi4py import MPI
 
-        vec = fem.assemble_vector(self._F_u_form)
+        vec = fem.assemble_vector(self._F_u_forms[body])
         vec.scatter_reverse(la.InsertMode.add)
         return float(self.comm.allreduce(float(vec.array[owned].sum()), op=MPI.SUM))
 
@@ -543,7 +728,8 @@ class BiotProblem:
                     ref = np.maximum(ref, rn)
                     # force scale of the u block: the internal force of the current stress
                     # (includes the geostatic state) and the plate force (not in the residual)
-                    ref[0] = max(ref[0], self._internal_force_norm())
+                    for i, fn in zip(self._u_blocks, self._internal_force_norms(), strict=True):
+                        ref[i] = max(ref[i], fn)
                     if plate is not None:
                         ref[0] = max(ref[0], abs(plate["spec"].force * load_factor))
                     self._R_run = np.maximum(self._R_run, ref)
@@ -601,30 +787,37 @@ class BiotProblem:
         info.seconds = time.perf_counter() - t_start
         return info
 
-    def _internal_force_norm(self) -> float:
-        """Euclidean norm (kN) of the assembled internal force ``int sigma' : eps(v)``."""
+    def _internal_force_norms(self) -> list[float]:
+        """Euclidean norms (kN) of each body's internal force ``int sigma' : eps(v)``."""
         from dolfinx import fem, la
         from mpi4py import MPI
 
-        vec = fem.assemble_vector(self._Fint_form)
-        vec.scatter_reverse(la.InsertMode.add)
-        n = self.V.dofmap.index_map.size_local * 3
-        loc = float(vec.array[:n] @ vec.array[:n])
-        return float(np.sqrt(self.comm.allreduce(loc, op=MPI.SUM)))
+        out = []
+        for b, form in zip(self.bodies, self._Fint_forms, strict=True):
+            vec = fem.assemble_vector(form)
+            vec.scatter_reverse(la.InsertMode.add)
+            n = b.V.dofmap.index_map.size_local * 3
+            loc = float(vec.array[:n] @ vec.array[:n])
+            out.append(float(np.sqrt(self.comm.allreduce(loc, op=MPI.SUM))))
+        return out
 
     def _state_residual(self, load_factor: float) -> tuple[np.ndarray, float]:
         """Evaluate the laws and the residual at the current fields: (block norms, plate gap)."""
         self._evaluate_law()
-        if not self.qp.all_finite():
-            raise ConvergenceError("NaN/inf stress from the constitutive law "
-                                   f"{self.qp.last_error}".rstrip())
+        for b in self.bodies:
+            if not b.qp.all_finite():
+                raise ConvergenceError("NaN/inf stress from the constitutive law "
+                                       f"{b.qp.last_error}".rstrip())
+        if self.interface is not None and not self._all_finite(self.interface.T.x.array):
+            raise ConvergenceError("NaN/inf traction from the interface law")
         self._assemble_residual()
         rn = self._block_norms(self.b)
         if not np.all(np.isfinite(rn)):
             raise ConvergenceError("NaN residual")
         g = 0.0
         if self._plate is not None:
-            g = self._resultant(self._plate["owned"]) - self._plate["spec"].force * load_factor
+            g = self._resultant(self._plate["owned"], self._plate["body"]) \
+                - self._plate["spec"].force * load_factor
         return rn, g
 
     def _border_plate(self, load_factor: float) -> float:
@@ -661,12 +854,12 @@ class BiotProblem:
         xa.axpy(-1.0, self.dx_vec)
         self._x_to_fields(xa)
         self._evaluate_law()
-        Ra = self._resultant(plate["owned"])
+        Ra = self._resultant(plate["owned"], plate["body"])
         xb = xa.copy()
         xb.axpy(-1.0, db)
         self._x_to_fields(xb)
         self._evaluate_law()
-        Rb = self._resultant(plate["owned"])
+        Rb = self._resultant(plate["owned"], plate["body"])
         target = pl.force * load_factor
         dU = -(Ra - target) / (Rb - Ra)
         self.dx_vec.axpy(dU, db)
@@ -683,14 +876,20 @@ class BiotProblem:
     # ------------------------------------------------------------------ state management
     def commit(self) -> None:
         """Adopt the converged step: state committed, ``u_n, p_n`` updated."""
-        self.qp.commit()
+        for b in self.bodies:
+            b.qp.commit()
+        if self.interface is not None:
+            self.interface.commit()
         for f, fn in zip(self.fields, self.fields_n, strict=True):
             fn.x.array[:] = f.x.array
         self._committed_U = self.plate_U
 
     def rollback(self) -> None:
         """Return to the last committed step (fields, plate and quadrature state)."""
-        self.qp.rollback()
+        for b in self.bodies:
+            b.qp.rollback()
+        if self.interface is not None:
+            self.interface.rollback()
         for f, fn in zip(self.fields, self.fields_n, strict=True):
             f.x.array[:] = fn.x.array
         self.plate_U = getattr(self, "_committed_U", 0.0)
@@ -699,8 +898,11 @@ class BiotProblem:
 
     def reset_displacements(self) -> None:
         """Set u (current and committed) to zero, keeping the stress state (after geostatic)."""
-        for f in (self.u, self.u_n):
-            f.x.array[:] = 0.0
+        for b in self.bodies:
+            b.u.x.array[:] = 0.0
+            b.u_n.x.array[:] = 0.0
+        if self.interface is not None:
+            self.interface.reset_jump()
         self.plate_U = 0.0
         self._committed_U = 0.0
 
@@ -714,7 +916,7 @@ class BiotProblem:
         get the stress and buoyant weight of the soil layer they replace (zero above ground).
         """
         out = {}
-        for g in self.qp.groups:
+        for g in (g for b in self.bodies for g in b.qp.groups):
             z = g.x[:, 2]
             sv = self._sigma_v(z)
             k0 = (g.material.k0 if isinstance(g.material, SoilMaterial)
@@ -760,14 +962,29 @@ class BiotProblem:
 
     def set_initial_stress(self, stress0: dict[str, np.ndarray | None]) -> None:
         """Initialise every group's law state with ``stress0[name]`` ((n,6) Mandel kPa)."""
-        self.qp.initialise(stress0)
+        for b in self.bodies:
+            b.qp.initialise(stress0)
 
     # ------------------------------------------------------------------ diagnostics
     def max_displacement(self) -> float:
         """Largest nodal displacement magnitude, m (all ranks)."""
         from mpi4py import MPI
 
-        nloc = self.V.dofmap.index_map.size_local
-        a = self.u.x.array[: 3 * nloc].reshape(-1, 3)
-        loc = float(np.sqrt((a**2).sum(axis=1)).max()) if nloc else 0.0
+        loc = 0.0
+        for b in self.bodies:
+            nloc = b.V.dofmap.index_map.size_local
+            a = b.u.x.array[: 3 * nloc].reshape(-1, 3)
+            loc = max(loc, float(np.sqrt((a**2).sum(axis=1)).max()) if nloc else 0.0)
         return float(self.comm.allreduce(loc, op=MPI.MAX))
+
+    def _all_finite(self, a: np.ndarray) -> bool:
+        from mpi4py import MPI
+
+        return bool(self.comm.allreduce(bool(np.all(np.isfinite(a))), op=MPI.LAND))
+
+
+def _local_index_map(comm: Any, n_local: int) -> Any:
+    """An index map with ``n_local`` owned entries per rank and no ghosts."""
+    from dolfinx import common
+
+    return common.IndexMap(comm, n_local)

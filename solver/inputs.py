@@ -121,6 +121,30 @@ class ElasticSolid:
 
 
 @dataclass(frozen=True)
+class InterfaceCoupling:
+    """Piles and cap on their own displacement field, joined to the soil by an interface.
+
+    Attributes:
+        laws: one interface law per group (constitutive protocol on the local jump
+            ``[opening, slip1, slip2]``): ``laws[j]`` for the pile shafts in soil layer ``j``
+            (0-based) and ``laws[L + j]`` for pile bases in layer ``j``; ``None`` where no facet
+            exists. ``L`` is the number of ``soil_layer_NN`` groups.
+        traction0: ``traction0(z, m) -> (n, 3)`` initial local traction ``[sigma_n, tau1,
+            tau2]`` (kPa, compression negative) of group ``m`` at heights ``z``; ``None`` gives
+            the in-situ state: ``K0 sigma'_v(z)`` on shafts, ``sigma'_v(z)`` on bases.
+    """
+
+    laws: tuple[Any, ...]
+    traction0: Callable[[Any, int], Any] | None = None
+
+    def __post_init__(self) -> None:
+        for m, law in enumerate(self.laws):
+            if law is not None and not (hasattr(law, "update") and hasattr(law, "initial_state")):
+                raise SolverInputError(
+                    f"interface laws[{m}] = {law!r} does not follow the constitutive protocol")
+
+
+@dataclass(frozen=True)
 class Discretisation:
     """Finite-element pair and quadrature.
 

@@ -60,6 +60,7 @@ class BodySplit:
     structure_map: Any
     soil: Any
     soil_map: Any
+    soil_vertex_map: Any
     is_structure: np.ndarray
     soil_layer: np.ndarray
     n_layers: int
@@ -96,9 +97,9 @@ def split_bodies(md: MeshData,
     struct_cells = np.flatnonzero(is_structure).astype(np.int32)
     soil_cells = np.flatnonzero(~is_structure).astype(np.int32)
     structure, structure_map, _, _ = dmesh.create_submesh(msh, tdim, struct_cells)
-    soil, soil_map, _, _ = dmesh.create_submesh(msh, tdim, soil_cells)
-    return BodySplit(msh, structure, structure_map, soil, soil_map, is_structure, soil_layer,
-                     n_layers)
+    soil, soil_map, soil_vmap, _ = dmesh.create_submesh(msh, tdim, soil_cells)
+    return BodySplit(msh, structure, structure_map, soil, soil_map, soil_vmap, is_structure,
+                     soil_layer, n_layers)
 
 
 def _mpi_max():
@@ -194,7 +195,23 @@ class NodalInterface:
         n_plus = ufl.FacetNormal(md.mesh)("+")
         N = self._assemble_nodal(ufl.inner(n_plus, v("-")) * self.dS(SHAFT), V_soil).reshape(-1, 3)
         self.groups: list[dict[str, Any]] = []
-        xyz = V_soil.tabulate_dof_coordinates()
+        # Consistent initial tractions: traction0 is linear in z within a group, so its
+        # phi_i-weighted mean over the group's facets is its value at the weighted height
+        # zbar[i, m] = int_m z phi_i dS / W[i, m] (Gauss rule here: exact), and the lumped
+        # (nodal) interface force then equals int_m traction0 phi_i dS exactly.
+        dS_gauss = ufl.Measure("dS", domain=md.mesh, subdomain_data=ents,
+                               metadata={"quadrature_degree": 2 * degree + 1})
+        zc = ufl.SpatialCoordinate(md.mesh)[2]
+        Zw = self._assemble_nodal(
+            ufl.inner(zc * shaft_part("-"), psi("-")) * dS_gauss(SHAFT)
+            + ufl.inner(zc * base_part("-"), psi("-")) * dS_gauss(BASE), Wsp).reshape(-1, 2 * L)
+        # Normal force factor: on a faceted (polygonal) shaft the consistent resultant of a
+        # normal pressure s at node i is s |N_i| (N_i = int n phi_i dS, horizontal part), not
+        # s A_i; the normal traction is scaled by |N_i| / A_i so that an in-situ pressure is in
+        # equilibrium with the soil's Gauss-integrated stress (-> 1 as the mesh is refined).
+        a_shaft = self.W[:, :L].sum(axis=1)
+        n_h = np.linalg.norm(N[:, :2], axis=1)
+        c_n = np.divide(n_h, a_shaft, out=np.ones_like(n_h), where=a_shaft > 0)
         tol = 1e-12 * max(float(np.max(self.A, initial=0.0)), 1e-300)
         for m in range(2 * L):
             nodes = np.flatnonzero(self.W[:, m] > tol).astype(np.int32)
@@ -202,9 +219,10 @@ class NodalInterface:
                 raise ValueError(f"interface group {m} has facets but no law")
             R = self._frames(N[nodes], base=m >= L)
             law = self.laws[m]
-            state = law.initial_state(nodes.size, traction0(xyz[nodes, 2], m)) if nodes.size \
-                else None
+            zbar = Zw[nodes, m] / self.W[nodes, m]
+            state = law.initial_state(nodes.size, traction0(zbar, m)) if nodes.size else None
             self.groups.append({"nodes": nodes, "R": R, "w": self.W[nodes, m] / self.A[nodes],
+                                "c_n": c_n[nodes] if m < L else np.ones(nodes.size),
                                 "law": law, "state": state, "trial": state})
         # Coefficients of the forms: nodal traction and tangent (global frame).
         self.T = fem.Function(V_soil, name="interface_traction")
@@ -298,8 +316,11 @@ class NodalInterface:
             t_loc, trial, D_loc = g["law"].update(d_loc, g["state"], dt)
             g["trial"] = trial
             w = g["w"]
-            np.add.at(T, nodes, w[:, None] * np.einsum("nji,nj->ni", R, t_loc))
-            np.add.at(D, nodes, w[:, None, None] * np.einsum("nki,nkl,nlj->nij", R, D_loc, R))
+            c = np.ones((nodes.size, 3))
+            c[:, 0] = g["c_n"]
+            np.add.at(T, nodes, w[:, None] * np.einsum("nji,nj->ni", R, c * t_loc))
+            np.add.at(D, nodes, w[:, None, None] * np.einsum("nki,nkl,nlj->nij", R,
+                                                             c[:, :, None] * D_loc, R))
         self.T.x.array[:] = T.ravel()
         self.D.x.array[:] = D.ravel()
 
@@ -313,6 +334,15 @@ class NodalInterface:
         """Forget the trial state (after a failed step)."""
         for g in self.groups:
             g["trial"] = g["state"]
+
+    def reset_jump(self) -> None:
+        """Take the current displacements as the reference (after the geostatic stage).
+
+        The committed law states (tractions) are kept; only the committed jump, from which the
+        next increments are measured, is set to zero with the displacements.
+        """
+        self._jump_committed[:] = 0.0
+        self.jump.x.array[:] = 0.0
 
 
 def _n_local_cells(msh: Any) -> int:
