@@ -335,6 +335,46 @@ class NodalInterface:
         for g in self.groups:
             g["trial"] = g["state"]
 
+    # ---------- output ----------
+    FIELDS = {"normal_traction": 1, "shear_traction_vertical": 1,
+              "shear_traction_circumferential": 1, "opening": 1, "slip_vertical": 1,
+              "slip_circumferential": 1, "viscoplastic_slip": 1, "detached": 1, "jump": 3}
+
+    def nodal_field_layout(self) -> dict[str, int]:
+        """Names and component counts of :meth:`nodal_fields`."""
+        return dict(self.FIELDS)
+
+    def nodal_fields(self) -> dict[str, np.ndarray]:
+        """Committed interface state per soil node (area-weighted over the node's groups).
+
+        Local frame values: ``normal_traction`` (effective, kPa, tension positive),
+        ``shear_traction_vertical`` (kPa, positive = upward shear on the pile),
+        ``shear_traction_circumferential``, ``opening`` (m, positive = gap), ``slip_vertical``
+        (m, positive = soil moves up relative to the pile), ``slip_circumferential``,
+        ``viscoplastic_slip`` (m, magnitude), ``detached`` (0..1); ``jump`` is the global
+        ``u_soil - u_structure`` (m). Zero away from the interface.
+        """
+        n = self.A.size
+        out = {k: np.zeros((n, c)) for k, c in self.FIELDS.items()}
+        jump = self._jump_committed.reshape(-1, 3)
+        out["jump"][:] = jump
+        for g in self.groups:
+            nodes = g["nodes"]
+            if nodes.size == 0:
+                continue
+            st, w = g["state"], g["w"][:, None]
+            loc = np.einsum("nij,nj->ni", g["R"], jump[nodes])
+            for key, val in (("normal_traction", st["traction"][:, :1]),
+                             ("shear_traction_vertical", st["traction"][:, 1:2]),
+                             ("shear_traction_circumferential", st["traction"][:, 2:3]),
+                             ("opening", loc[:, :1]), ("slip_vertical", loc[:, 1:2]),
+                             ("slip_circumferential", loc[:, 2:3]),
+                             ("viscoplastic_slip",
+                              np.linalg.norm(st["slip_vp"], axis=1, keepdims=True)),
+                             ("detached", st["detached"])):
+                np.add.at(out[key], nodes, w * val)
+        return out
+
     def reset_jump(self) -> None:
         """Take the current displacements as the reference (after the geostatic stage).
 

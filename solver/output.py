@@ -22,33 +22,25 @@ from pilegroup.constitutive.base import mandel_to_tensor
 from pilegroup.fileio import write_json_atomic
 
 
-class XDMFSeries:
-    """XDMF time series of a :class:`~pilegroup.solver.biot.BiotProblem`.
+class _MeshSeries:
+    """One XDMF file on one mesh: displacement, optional pressure, cell fields of a qp state."""
 
-    Fields: ``displacement`` (m, interpolated to the mesh's Q1 space), ``excess_pore_pressure``
-    (kPa, compression positive), ``effective_stress`` (kPa, tension positive, cell average) and
-    every other state of the laws with 6 (tensor) or 1 (scalar) components per point, e.g. the
-    plastic strain (cell average).
-    """
-
-    def __init__(self, problem: Any, path: str | Path) -> None:
+    def __init__(self, comm: Any, path: Path, mesh: Any, u: Any = None, qp: Any = None,
+                 p: Any = None) -> None:
         import basix.ufl
         from dolfinx import fem, io
 
-        self.problem = problem
-        self.path = Path(path)
-        mesh = problem.mesh
-        self.comm = mesh.comm
-        if self.comm.rank == 0:
-            self.path.parent.mkdir(parents=True, exist_ok=True)
-        self.comm.barrier()
+        self.comm, self.path, self.u, self.qp, self.p = comm, path, u, qp, p
         cell = mesh.basix_cell()
-        self.V1 = fem.functionspace(mesh, basix.ufl.element("Lagrange", cell, 1, shape=(3,)))
-        self.u1 = fem.Function(self.V1, name="displacement")
+        self.u1 = None
+        if u is not None:
+            V1 = fem.functionspace(mesh, basix.ufl.element("Lagrange", cell, 1, shape=(3,)))
+            self.u1 = fem.Function(V1, name=u.name if u.name.startswith("displacement")
+                                   else "displacement")
         self.T0 = fem.functionspace(mesh, basix.ufl.element("DG", cell, 0, shape=(3, 3)))
         self.S0 = fem.functionspace(mesh, basix.ufl.element("DG", cell, 0))
         keys: dict[str, int] = {}
-        for g in problem.qp.groups:
+        for g in (qp.groups if qp is not None else []):
             for k, n in g.material.law.state_layout().items():
                 if n in (1, 6):
                     keys[k] = n
@@ -56,47 +48,137 @@ class XDMFSeries:
         for k, n in keys.items():
             name = {"stress": "effective_stress", "eps_p": "plastic_strain"}.get(k, k)
             self.cell_fields[k] = fem.Function(self.T0 if n == 6 else self.S0, name=name)
-        with io.XDMFFile(self.comm, str(self.path), "w") as f:
+        with io.XDMFFile(comm, str(path), "w") as f:
             f.write_mesh(mesh)
-        # with solids the pressure lives on the soil sub-mesh: its own file
-        self.p_path = None
-        if problem.p_mesh is not mesh:
-            self.p_path = self.path.with_name(self.path.stem + "_pressure.xdmf")
-            with io.XDMFFile(self.comm, str(self.p_path), "w") as f:
-                f.write_mesh(problem.p_mesh)
-        self.times: list[float] = []
 
-    def _update_cell_fields(self) -> None:
+    def write(self, t: float) -> None:
+        from dolfinx import io
+
+        if self.u1 is not None:
+            self.u1.interpolate(self.u)
         for key, f in self.cell_fields.items():
             f.x.array[:] = 0.0
             n = 6 if f.function_space is self.T0 else 1
-            for cells, avg in self.problem.qp.cell_average(key).values():
+            for cells, avg in self.qp.cell_average(key).values():
                 if n == 6:
-                    vals = mandel_to_tensor(avg).reshape(-1, 9)
-                    f.x.array.reshape(-1, 9)[cells] = vals
+                    f.x.array.reshape(-1, 9)[cells] = mandel_to_tensor(avg).reshape(-1, 9)
                 else:
                     f.x.array[cells] = avg[:, 0]
             f.x.scatter_forward()
-
-    def write(self, t: float) -> None:
-        """Append the current fields at time ``t`` (day)."""
-        from dolfinx import io
-
-        self.u1.interpolate(self.problem.u)
-        self._update_cell_fields()
         with io.XDMFFile(self.comm, str(self.path), "a") as f:
-            f.write_function(self.u1, t)
-            if self.p_path is None:
-                f.write_function(self.problem.p, t)
+            if self.u1 is not None:
+                f.write_function(self.u1, t)
+            if self.p is not None:
+                f.write_function(self.p, t)
             for fn in self.cell_fields.values():
                 f.write_function(fn, t)
-        if self.p_path is not None:
-            with io.XDMFFile(self.comm, str(self.p_path), "a") as f:
-                f.write_function(self.problem.p, t)
+
+
+class XDMFSeries:
+    """XDMF time series of a :class:`~pilegroup.solver.biot.BiotProblem`.
+
+    Files (next to ``path``): ``path`` holds the soil (or, with tied piles, the whole mesh):
+    ``displacement`` (m, Q1), ``excess_pore_pressure`` (kPa, compression positive, when it
+    lives on that mesh), ``effective_stress`` (kPa, tension positive, cell average) and every
+    other 1- or 6-component law state (e.g. ``plastic_strain``). ``<stem>_pressure.xdmf``: the
+    pressure when it lives on a soil sub-mesh of a tied model. ``<stem>_structure.xdmf``: pile
+    and cap displacement and stress (separate fields). ``<stem>_interface.xdmf``: interface
+    fields on the pile-surface facets (see :meth:`NodalInterface.nodal_fields`).
+    """
+
+    def __init__(self, problem: Any, path: str | Path) -> None:
+        self.problem = problem
+        self.path = Path(path)
+        self.comm = problem.comm
+        if self.comm.rank == 0:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+        self.comm.barrier()
+        stem = self.path.stem
+        self.series: list[Any] = []
+        for i, b in enumerate(problem.bodies):
+            path_b = self.path if i == 0 else self.path.with_name(f"{stem}_{b.name}.xdmf")
+            p = problem.p if problem.p_mesh is b.mesh else None
+            self.series.append(_MeshSeries(self.comm, path_b, b.mesh, b.u, b.qp, p))
+        if all(problem.p_mesh is not b.mesh for b in problem.bodies):
+            self.series.append(_MeshSeries(self.comm, self.path.with_name(
+                f"{stem}_pressure.xdmf"), problem.p_mesh, p=problem.p))
+        if problem.interface is not None:
+            self.series.append(_InterfaceSeries(problem, self.path.with_name(
+                f"{stem}_interface.xdmf")))
+        self.times: list[float] = []
+
+    def write(self, t: float) -> None:
+        """Append the current fields at time ``t`` (day); each file is closed after."""
+        for s in self.series:
+            s.write(t)
         self.times.append(float(t))
 
     def close(self) -> None:
         """Nothing stays open between writes; kept for the writer protocol."""
+
+
+class _InterfaceSeries:
+    """Interface fields on a facet mesh of the pile surfaces (nodal values, Q1)."""
+
+    def __init__(self, problem: Any, path: Path) -> None:
+        from dolfinx import fem, io
+        from dolfinx import mesh as dmesh
+
+        itf = problem.interface
+        soil = problem.bodies[0]
+        names = [n for n in problem.md.facet_names if n.startswith(("shaft_", "base_"))]
+        facets = np.unique(np.concatenate(
+            [problem._sub_facets(soil, problem.md.facet_tags.find(problem.md.facet_tag(n)))
+             for n in names]))
+        tdim = soil.mesh.topology.dim
+        fmesh, _, vmap, _ = dmesh.create_submesh(soil.mesh, tdim - 1, facets)
+        self.comm, self.path, self.itf = problem.comm, path, itf
+        nv = fmesh.topology.index_map(0).size_local + fmesh.topology.index_map(0).num_ghosts
+        sub_v = vmap.sub_topology_to_topology(np.arange(nv, dtype=np.int32), inverse=False)
+        self.node_of = _vertex_to_dof(soil.V)[sub_v]  # facet-mesh vertex -> soil node
+        self.dof_of = _vertex_to_dof_sub(fmesh)
+        self.fields: dict[str, Any] = {}
+        for key, k in itf.nodal_field_layout().items():
+            shape = (k,) if k > 1 else ()
+            W = fem.functionspace(fmesh, ("Lagrange", 1, shape))
+            self.fields[key] = fem.Function(W, name=key)
+        with io.XDMFFile(self.comm, str(path), "w") as f:
+            f.write_mesh(fmesh)
+
+    def write(self, t: float) -> None:
+        from dolfinx import io
+
+        vals = self.itf.nodal_fields()
+        for key, fn in self.fields.items():
+            a = vals[key].reshape(vals[key].shape[0], -1)
+            arr = fn.x.array.reshape(-1, a.shape[1])
+            arr[self.dof_of] = a[self.node_of]
+        with io.XDMFFile(self.comm, str(self.path), "a") as f:
+            for fn in self.fields.values():
+                f.write_function(fn, t)
+
+
+def _vertex_to_dof(V: Any) -> np.ndarray:
+    """Node (block dof) of each vertex of a degree-1 Lagrange space (dof i = cell vertex i)."""
+    msh = V.mesh
+    tdim = msh.topology.dim
+    msh.topology.create_connectivity(tdim, 0)
+    c2v = msh.topology.connectivity(tdim, 0)
+    nv = msh.topology.index_map(0).size_local + msh.topology.index_map(0).num_ghosts
+    out = np.full(nv, -1, dtype=np.int64)
+    nc = msh.topology.index_map(tdim).size_local + msh.topology.index_map(tdim).num_ghosts
+    dm = V.dofmap.list[:nc]
+    nper = dm.shape[1]
+    if nper != c2v.offsets[1] - c2v.offsets[0]:
+        raise ValueError("interface output needs a degree-1 displacement space (Q1Q1)")
+    out[c2v.array[: nc * nper]] = dm.reshape(-1)
+    return out
+
+
+def _vertex_to_dof_sub(fmesh: Any) -> np.ndarray:
+    from dolfinx import fem
+
+    return _vertex_to_dof(fem.functionspace(fmesh, ("Lagrange", 1)))
 
 
 def write_summary(path: str | Path, data: dict[str, Any], comm: Any) -> None:

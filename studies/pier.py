@@ -197,7 +197,8 @@ class SettlementProbe:
         return self._comm.allreduce(val, op=self._sum) / self._area
 
 
-def run_coupled(sc: Scenario, md: Any, out: Path, preset: str | None = None) -> dict[str, Any]:
+def run_coupled(sc: Scenario, md: Any, out: Path, preset: str | None = None,
+                mesh_size: float | None = None) -> dict[str, Any]:
     """Run every stage of ``sc`` on ``md``; write results.xdmf, settlement CSV and summary.
 
     Returns the summary (also written as ``out/summary_solver.json``, atomically, at every
@@ -207,14 +208,18 @@ def run_coupled(sc: Scenario, md: Any, out: Path, preset: str | None = None) -> 
     from pilegroup.solver.stepping import run_stages
 
     t0 = time.perf_counter()
-    pb = build_problem(sc, md, preset)
+    from pilegroup.studies.piles import PileProbe
+
+    pb = build_problem(sc, md, preset, mesh_size)
     probe = SettlementProbe(pb, md, load_facets(sc, md))
+    piles = PileProbe(sc, pb, out)
     series = XDMFSeries(pb, out / "results.xdmf") if sc.outputs.xdmf else None
     history: list[tuple[float, str, float]] = []
     comm = md.mesh.comm
 
     def summary(complete: bool) -> dict[str, Any]:
-        return {"complete": complete, "dofs": pb.num_dofs,
+        return {"complete": complete, "dofs": pb.num_dofs, "centre_pile": piles.centre,
+                "interface_mode": sc.interface.mode,
                 "element": sc.numerics.element, "preset": pb.options.preset,
                 "settlement_m": [{"t_day": t, "stage": s, "settlement_m": w}
                                  for t, s, w in history],
@@ -223,6 +228,8 @@ def run_coupled(sc: Scenario, md: Any, out: Path, preset: str | None = None) -> 
 
     def on_milestone(problem: Any, t: float, stage: str) -> None:
         history.append((t, stage, probe()))
+        piles.record_step(t)
+        piles.record_output(t)
         if series is not None:
             series.write(t)
         if comm.rank == 0:
@@ -236,6 +243,7 @@ def run_coupled(sc: Scenario, md: Any, out: Path, preset: str | None = None) -> 
                bar_format="{desc}: {n:.3g}/{total:g} day |{bar}| {elapsed}{postfix}")
 
     def on_step(problem: Any, t: float, stage: str) -> None:
+        piles.record_step(t)
         bar.n = t
         bar.set_postfix_str(f"{stage}, settlement {1000 * probe():.2f} mm")
 

@@ -54,4 +54,9 @@ def run_scenario(sc: Scenario, out: Path, mesh_size: float | None = None,
     if comm.rank == 0:
         write_json_atomic(out / "summary.json", summary)
         log.info("wrote %s", out / "summary.json")
+        if solved is not None and sc.outputs.plots:
+            from pilegroup.studies.report import write_report
+
+            for path in write_report(out):
+                log.info("wrote %s", path)
     return summary

@@ -8,6 +8,7 @@ from pathlib import Path
 import pytest
 
 from pilegroup.studies.cli import build_parser, main
+from pilegroup.studies.pier import GEOSTATIC_TOL_M
 
 BIN = Path(sys.executable).parent
 
@@ -59,8 +60,16 @@ def test_mesh_and_run_single_pile(tmp_path, monkeypatch):
     assert [h["t_day"] for h in hist] == [0.0, 0.5, 2.0]
     # the pile settles under load and keeps settling while the soil consolidates
     assert 0 < hist[1]["settlement_m"] < hist[2]["settlement_m"]
-    assert summary["solver"]["geostatic_max_u_m"] < 1e-9
-    assert (tmp_path / "r" / "results.xdmf").is_file()
+    # single_pile uses the viscoplastic interface: separate pile and soil fields
+    assert summary["solver"]["interface_mode"] == "viscoplastic"
+    assert summary["solver"]["geostatic_max_u_m"] < GEOSTATIC_TOL_M
+    for name in ("results.xdmf", "results_structure.xdmf", "results_interface.xdmf",
+                 "pile_profiles.csv", "pile_loads.csv", "layer_history.csv",
+                 "plots/friction_profiles.png", "plots/settlement_time.png"):
+        assert (tmp_path / "r" / name).is_file(), name
+    # the head load of the single pile is the applied load (axial force due to the load)
+    loads = (tmp_path / "r" / "pile_loads.csv").read_text().splitlines()
+    assert float(loads[-1].split(",")[-1]) == pytest.approx(500.0, rel=0.02)
 
 
 @pytest.mark.mpi

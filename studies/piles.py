@@ -1,0 +1,217 @@
+"""Pile results of a run: axial force, shaft friction and pile-soil relative displacement.
+
+Conventions of the CSV files (studies/report.py reads them): depth in m below the ground surface
+(z = 0), positive down; axial force kN, compression positive; shaft friction kPa, positive when
+the soil supports the pile (upward shear on the pile); relative displacement m, pile settlement
+minus adjacent soil settlement (positive = the pile moves down relative to the soil).
+
+* Axial force of pile ``i`` at the mid-height of each element layer of the pile:
+  ``N = -(1/dz) sum_cells volume * mean(sigma_zz)`` (the exact cross-section mean of the cell
+  averages of the pile's stress; stresses tension positive), minus its value after the
+  geostatic stage (the wished-in-place pile starts with the in-situ stress of the soil it
+  replaces): the force due to the loads, as the paper's strain gauges measure it.
+* With the interface: shaft friction and relative displacement are the area-weighted means of
+  the nodal interface state (``shear_traction_vertical``, ``slip_vertical``) over the ring of
+  interface nodes at each node level; the stations are the node levels. Tied piles have no
+  slip: the relative displacement is 0 and the friction is ``(dN/dz) / (pi d)`` at the element
+  layer mid-heights.
+* Layer means per pile and soil layer (``layer_history.csv``): area-weighted over the layer's
+  shaft interface nodes of that pile.
+
+Every number is all-reduced over the ranks; rank 0 writes.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from pilegroup.fileio import write_text_atomic
+
+PROFILE_COLUMNS = ("t_day,pile,depth_m,layer,axial_force_kN,shaft_friction_kPa,"
+                   "relative_displacement_m")
+LAYER_COLUMNS = ("t_day,pile,layer,layer_name,depth_top_m,depth_bottom_m,shaft_friction_kPa,"
+                 "relative_displacement_m,viscoplastic_slip_m,normal_traction_kPa")
+LOAD_COLUMNS = "t_day,pile,x_m,y_m,head_force_kN"
+
+
+def _sum(comm: Any, a: np.ndarray) -> np.ndarray:
+    from mpi4py import MPI
+
+    return comm.allreduce(a, op=MPI.SUM)
+
+
+class PileProbe:
+    """Collects pile profiles, per-layer histories and pile head loads during a run.
+
+    Args:
+        sc: the scenario (pile positions, diameter, layers).
+        pb: the :class:`~pilegroup.solver.biot.BiotProblem`.
+        out: output folder for the CSV files.
+    """
+
+    def __init__(self, sc: Any, pb: Any, out: Path) -> None:
+        from dolfinx import fem
+        from dolfinx import mesh as dmesh
+
+        self.sc, self.pb, self.out = sc, pb, Path(out)
+        self.comm = pb.comm
+        self.xy = np.array(sc.piles.xy, dtype=float)
+        self.d = sc.piles.diameter_m
+        c = self.xy.mean(axis=0)
+        self.centre = int(np.argmin(np.linalg.norm(self.xy - c, axis=1))) + 1
+        tops = np.concatenate([[0.0], -np.cumsum([lay.thickness_m or np.inf
+                                                  for lay in sc.layers])])
+        self._layer_tops = tops
+        body = pb.bodies[-1]  # the structure (or the whole mesh when tied)
+        self.body = body
+        tdim = body.mesh.topology.dim
+        D0 = fem.functionspace(body.mesh, ("DG", 0))
+        import ufl
+
+        vol = fem.assemble_vector(fem.form(ufl.TestFunction(D0) * ufl.dx))
+        self._vol = vol.array
+        # element layers of each pile: (pile, z_mid) bins, global
+        self._pile_cells: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+        for g in body.qp.groups:
+            if not g.name.startswith("pile_"):
+                continue
+            i = int(g.name.removeprefix("pile_"))
+            zc = dmesh.compute_midpoints(body.mesh, tdim, g.cells)[:, 2] if g.cells.size \
+                else np.zeros(0)
+            self._pile_cells[i] = (g.cells, np.round(zc, 6))
+        self._levels = {}
+        for i in range(1, len(self.xy) + 1):
+            zc = self._pile_cells.get(i, (None, np.zeros(0)))[1]
+            allz = np.unique(np.concatenate(self.comm.allgather(zc)))
+            self._levels[i] = allz[allz < 0.0][::-1]  # below ground, top down
+        self._itf = pb.interface
+        if self._itf is not None:
+            V = pb.bodies[0].V
+            nloc = V.dofmap.index_map.size_local
+            x = V.tabulate_dof_coordinates()
+            owned = np.arange(x.shape[0]) < nloc
+            self._x = x
+            r = np.linalg.norm(x[:, None, :2] - self.xy[None, :, :], axis=2)
+            on = (r < 0.5 * self.d * 1.001) & owned[:, None] & (self._itf.A[:, None] > 0)
+            self._node_pile = np.where(on.any(axis=1), np.argmax(on, axis=1) + 1, 0)
+        self.profile_rows: list[str] = []
+        self.layer_rows: list[str] = []
+        self.load_rows: list[str] = []
+        self._last_step_t: float | None = None
+        self._N0: dict[int, np.ndarray] = {}
+
+    # ------------------------------------------------------------------ quantities
+    def axial_force(self, i: int) -> tuple[np.ndarray, np.ndarray]:
+        """(depth of the element-layer mid-heights, axial force kN) of pile ``i``."""
+        levels = self._levels[i]
+        cells, zc = self._pile_cells.get(i, (np.zeros(0, np.int32), np.zeros(0)))
+        avg = self.body.qp.cell_average("stress").get(f"pile_{i}")
+        loc = np.zeros(levels.size)
+        if avg is not None and cells.size:
+            below = zc < 0.0  # the embedded part inside the cap is not a pile section
+            szz = avg[1][below, 2]
+            k = np.searchsorted(-levels, -zc[below])
+            np.add.at(loc, k, self._vol[cells[below]] * szz)
+        tot = _sum(self.comm, loc)
+        edges = self._layer_heights(levels)
+        return -levels, -tot / edges
+
+    @staticmethod
+    def _layer_heights(levels: np.ndarray) -> np.ndarray:
+        """Element-layer heights from their mid-heights (top down, contiguous layers)."""
+        h = np.zeros(levels.size)
+        top = 0.0
+        for k, zm in enumerate(levels):
+            h[k] = 2.0 * (top - zm)
+            top -= h[k]
+        return h
+
+    def _layer_of(self, depth: np.ndarray) -> np.ndarray:
+        return np.searchsorted(-self._layer_tops, depth, side="right")
+
+    def interface_profile(self, i: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(node depths, friction kPa, relative displacement m) on the shaft of pile ``i``."""
+        f = self._itf.nodal_fields()
+        mask = (self._node_pile == i) & (self._x[:, 2] < 0.0)
+        shaft_w = self._itf.W[:, : self._itf.split.n_layers].sum(axis=1)
+        mask &= shaft_w > 0
+        z = np.round(self._x[mask, 2], 6)
+        allz = np.unique(np.concatenate(self.comm.allgather(z)))[::-1]
+        k = np.searchsorted(-allz, -z)
+        w = shaft_w[mask]
+        acc = np.zeros((3, allz.size))
+        np.add.at(acc[0], k, w)
+        np.add.at(acc[1], k, w * f["shear_traction_vertical"][mask, 0])
+        np.add.at(acc[2], k, w * f["slip_vertical"][mask, 0])
+        acc = _sum(self.comm, acc)
+        wsum = np.where(acc[0] > 0, acc[0], 1.0)
+        return -allz, acc[1] / wsum, acc[2] / wsum
+
+    def layer_means(self, i: int) -> dict[int, tuple[float, float, float, float]]:
+        """Per soil layer (1-based): mean friction, relative displacement, vp slip, sigma_n."""
+        L = self._itf.split.n_layers
+        acc = np.zeros((L, 5))
+        jump = self._itf._jump_committed.reshape(-1, 3)
+        for m in range(L):
+            g = self._itf.groups[m]
+            nodes = g["nodes"]
+            if nodes.size == 0:
+                continue
+            sel = self._node_pile[nodes] == i
+            n = nodes[sel]
+            w = self._itf.W[n, m]
+            st = g["state"]
+            loc = np.einsum("nij,nj->ni", g["R"][sel], jump[n])
+            acc[m] += [w.sum(), w @ st["traction"][sel, 1], w @ loc[:, 1],
+                       w @ np.linalg.norm(st["slip_vp"][sel], axis=1),
+                       w @ st["traction"][sel, 0]]
+        acc = _sum(self.comm, acc)
+        return {m + 1: tuple(acc[m, 1:] / acc[m, 0]) for m in range(L) if acc[m, 0] > 0}
+
+    # ------------------------------------------------------------------ recording
+    def record_output(self, t: float) -> None:
+        """Profiles of every pile and pile head loads at output time ``t`` (collective)."""
+        for i in range(1, len(self.xy) + 1):
+            dN, N = self.axial_force(i)
+            N = N - self._N0.setdefault(i, N.copy())
+            if N.size:
+                x, y = self.xy[i - 1]
+                self.load_rows.append(f"{t:.6g},{i},{x:.6g},{y:.6g},{N[0]:.9g}")
+            if self._itf is not None:
+                dz, fr, rel = self.interface_profile(i)
+                Nz = np.interp(dz, dN, N) if N.size else np.zeros_like(dz)
+            else:
+                dz, Nz = dN, N
+                fr = -np.gradient(N, dN) / (math.pi * self.d) if N.size > 1 \
+                    else np.zeros_like(N)
+                rel = np.zeros_like(N)
+            lay = self._layer_of(dz)
+            self.profile_rows += [f"{t:.6g},{i},{a:.6g},{b},{c:.9g},{e:.9g},{f:.9g}"
+                                  for a, b, c, e, f in zip(dz, lay, Nz, fr, rel, strict=True)]
+        self._write()
+
+    def record_step(self, t: float) -> None:
+        """Layer means of the centre pile after an accepted step (collective)."""
+        if self._itf is None or t == self._last_step_t:
+            return
+        self._last_step_t = t
+        i = self.centre
+        for j, (fr, rel, vp, sn) in self.layer_means(i).items():
+            lay = self.sc.layers[j - 1]
+            top, bot = 0.0 - self._layer_tops[j - 1], 0.0 - self._layer_tops[j]
+            bot = bot if np.isfinite(bot) else self.sc.site.depth_m
+            self.layer_rows.append(f"{t:.6g},{i},{j},{lay.name},{top:.6g},{bot:.6g},{fr:.9g},"
+                                   f"{rel:.9g},{vp:.9g},{sn:.9g}")
+
+    def _write(self) -> None:
+        if self.comm.rank != 0:
+            return
+        for name, head, rows in (("pile_profiles.csv", PROFILE_COLUMNS, self.profile_rows),
+                                 ("pile_loads.csv", LOAD_COLUMNS, self.load_rows),
+                                 ("layer_history.csv", LAYER_COLUMNS, self.layer_rows)):
+            if rows:
+                write_text_atomic(self.out / name, "\n".join([head, *rows]) + "\n")
