@@ -61,7 +61,8 @@ BROKEN = [
      ("thickness_m = 1.0", "length_in_soil_m = 70.0"), 1, "layers", "must reach the pile toe"),
     ("end-before-load", "duration_day = 1.0", "duration_day = 400.0", 1, "time.end_day",
      "end of load stage"),
-    ("bad-choice", 'element = "Q2Q1"', 'element = "P3"', 1, "numerics.element", "one of"),
+    ("bad-choice", 'element = "Q1Q1"  # measured faster at equal accuracy: docs/benchmarks.md',
+     'element = "P3"', 1, "numerics.element", "one of"),
     ("output-after-end", "output_days = [0.0, 1.0, 30.0, 89.0, 180.0, 317.0]",
      "output_days = [0.0, 400.0]", 1, "time.output_days[1]", "end_day"),
 ]
