@@ -178,7 +178,9 @@ def build_parser() -> argparse.ArgumentParser:
                         description="Run verification cases through the real pipeline and "
                         "print error, tolerance and pass/fail per case (exit 1 if any fails). "
                         "Cases: terzaghi (1D consolidation), mandel (Mandel-Cryer effect), "
-                        "triaxial (Mohr-Coulomb failure load). Works under mpirun -n 2.")
+                        "triaxial (Mohr-Coulomb failure load), shaft-capacity (pile pushed to "
+                        "shaft failure), interface-patch (solver interface vs pointwise law), "
+                        "tied-limit (stiff interface vs tied pile). Works under mpirun -n 2.")
     pv.add_argument("cases", nargs="*", metavar="CASE", help="cases to run (default: all)")
     pv.add_argument("--json", action="store_true", help="one JSON object per case")
     pv.add_argument("--size", choices=["fast", "bench"], default="fast",

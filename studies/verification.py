@@ -703,6 +703,11 @@ CASES: dict[str, Callable[..., CaseResult]] = {
     "triaxial": triaxial,
 }
 
+# interface cases (shaft-capacity, interface-patch, tied-limit): studies/verification_interface.py
+from pilegroup.studies.verification_interface import INTERFACE_CASES  # noqa: E402
+
+CASES.update(INTERFACE_CASES)
+
 
 def run_cases(names: Sequence[str] | None = None, size: str = "fast",
               json: bool = False, out: Any = None, pair: str | None = None,

@@ -1,0 +1,74 @@
+"""Interface verification cases (studies/verification_interface.py): serial and mpirun -n 2."""
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from pilegroup.studies import verification as ver
+
+ROOT = Path(__file__).resolve().parents[2]
+CASES = ["shaft-capacity", "interface-patch", "tied-limit"]
+
+
+def test_cases_are_registered():
+    assert all(c in ver.CASES for c in CASES)
+
+
+def test_shaft_capacity():
+    r = ver.CASES["shaft-capacity"]()
+    d = r.details
+    assert r.error <= r.tolerance == 0.02 and r.passed
+    # every shaft node at the Drucker-Prager limit; plateau of the head load
+    assert d["shaft_nodes_at_yield"] == d["shaft_nodes"] > 0
+    loads = [row["head_load_kN"] for row in d["rows"]]
+    assert np.allclose(loads[-3:], d["capacity_actual_sigma_n_kN"], rtol=2e-4)
+    # in-situ tractions lump exactly onto the closed form P_h (k L + 3 alpha K0 gamma' L^2/2)
+    assert d["err_insitu"] < 1e-12
+    # the polygonal perimeter (8 sides) is used, not pi d
+    assert d["perimeter_m"] == pytest.approx(8 * np.sin(np.pi / 8), rel=1e-12)
+
+
+def test_interface_patch_matches_pointwise_law():
+    r = ver.CASES["interface-patch"]()
+    d = r.details
+    assert r.error <= r.tolerance == 1e-6 and r.passed
+    assert d["node_spread_max"] < 1e-12  # homogeneous: every interface node alike
+    assert d["creep_slip_vp_m"] > 0.01  # creep at constant shear load is exercised
+    tau1 = [row["tau1"] for row in d["rows"] if row["t"] > 1.0]
+    assert np.allclose(tau1, 32.0, rtol=1e-8)
+
+
+def test_tied_limit():
+    r = ver.CASES["tied-limit"]()
+    assert r.error <= r.tolerance == 0.01 and r.passed
+    assert r.error < 1e-3  # measured 5.2e-5
+
+
+def _json_lines(out):
+    return {d["case"]: d for d in (json.loads(x) for x in out.splitlines() if x.startswith("{"))}
+
+
+@pytest.mark.mpi
+def test_interface_cases_under_mpirun_match_serial():
+    exe = str(Path(sys.executable).parent / "pilegroup")
+    mpirun = str(Path(sys.executable).parent / "mpirun")
+    cmd = [exe, "verify", *CASES, "--json"]
+    serial = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT, timeout=600)
+    par = subprocess.run([mpirun, "-n", "2", *cmd], capture_output=True, text=True, cwd=ROOT,
+                         timeout=600)
+    assert serial.returncode == 0, serial.stderr[-2000:]
+    assert par.returncode == 0, par.stderr[-2000:]
+    s, p = _json_lines(serial.stdout), _json_lines(par.stdout)
+    for c in CASES:
+        assert s[c]["passed"] and p[c]["passed"] and p[c]["details"]["ranks"] == 2
+        assert p[c]["dofs"] == s[c]["dofs"] and p[c]["steps"] == s[c]["steps"]
+        # the errors are differences of nearly equal numbers (patch: ~1e-9, at the Newton
+        # tolerance): compared in absolute terms
+        assert p[c]["error"] == pytest.approx(s[c]["error"], rel=1e-8, abs=1e-10), c
+        for rs, rp in zip(s[c]["details"]["rows"], p[c]["details"]["rows"], strict=True):
+            for k, v in rs.items():
+                assert rp[k] == pytest.approx(v, rel=1e-8, abs=1e-12), (c, k)
