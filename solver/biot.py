@@ -62,7 +62,7 @@ class StepInfo:
     converged: bool
     newton_its: int = 0
     ksp_its: int = 0
-    residuals: list[tuple[float, float]] = field(default_factory=list)
+    residuals: list[tuple[float, ...]] = field(default_factory=list)
     message: str = ""
     seconds: float = 0.0
 
@@ -723,7 +723,7 @@ class BiotProblem:
         try:
             rn, g_plate = self._state_residual(load_factor)
             for it in range(nw.max_it + 1):
-                info.residuals.append((float(rn[0]), float(rn[1])))
+                info.residuals.append(tuple(float(r) for r in rn))
                 if it == 0:
                     ref = np.maximum(ref, rn)
                     # force scale of the u block: the internal force of the current stress
@@ -731,7 +731,8 @@ class BiotProblem:
                     for i, fn in zip(self._u_blocks, self._internal_force_norms(), strict=True):
                         ref[i] = max(ref[i], fn)
                     if plate is not None:
-                        ref[0] = max(ref[0], abs(plate["spec"].force * load_factor))
+                        ib = self._block_of(self.bodies[plate["body"]])
+                        ref[ib] = max(ref[ib], abs(plate["spec"].force * load_factor))
                     self._R_run = np.maximum(self._R_run, ref)
                 ok_res = np.all(rn <= nw.rtol * ref + nw.atol)
                 if plate is not None:
