@@ -349,11 +349,6 @@ def interface_patch(size: str = "fast", pair: str = "Q1Q1", preset: str = "direc
         plates=[RigidPlate("top", 0, -tau1 * 1.0)],
         options=SolverOptions(preset=preset, prefix="patch_"), self_weight=False,
         interface=InterfaceCoupling((None, law)))
-    # Workaround (solver/biot.py, solve_step): the plate force is added to the residual scale of
-    # block 0 (the soil) whatever body carries the plate; here the plate is on the structure,
-    # whose internal force is ~0 at the start, so its scale stays ~1e-14 and the line search
-    # rejects every Newton step. Seed the structure block's run scale with the plate force.
-    pb._R_run[pb._block_of(pb.bodies[1])] = tau1 * 1.0
     area = _interior_facet_area(md, "base_1")
     itf = pb.interface
     g = itf.groups[1]
