@@ -400,6 +400,8 @@ class BiotProblem:
         self.ksp = create_ksp(self.comm, self.A, self.P, self.options.prefix,
                               self.options.preset, self.options.overrides, is_u, is_p, nns)
         self._matrix_key: float | None = None  # dt of the assembled matrix (linear reuse)
+        self.refactorisations = 0  # LU factorisations with a reuse preset
+        self._reusing = False
         self._R_run = np.zeros(len(self.fields))
         for b in self.bodies:
             b.qp.initialise({})
@@ -666,11 +668,30 @@ class BiotProblem:
         return True
 
     def _solve(self, rhs: Any, sol: Any) -> int:
+        """Solve with the KSP; with a reused factorisation, refactor when it has gone stale.
+
+        Presets with ``reuse_factor_its`` keep the last LU factorisation as the preconditioner
+        of GMRES across Newton iterations and steps (the matrix itself is always the current
+        Jacobian, so Newton stays exact); a solve that needs more than ``reuse_factor_its``
+        iterations, or fails, triggers a new factorisation (and a re-solve when it failed).
+        """
         t0 = time.perf_counter()
+        limit = get_preset(self.options.preset).reuse_factor_its
+        pc = self.ksp.getPC()
         self.ksp.solve(rhs, sol)
+        if limit and self.ksp.getConvergedReason() < 0 and self._reusing:
+            self._set_reuse(pc, False)  # stale factorisation: refactor and solve again
+            self.ksp.solve(rhs, sol)
         its = check_reason(self.ksp, "Newton correction")
+        if limit:
+            self.refactorisations += int(not self._reusing)
+            self._set_reuse(pc, its <= limit)
         self.timings["solve"] += time.perf_counter() - t0
         return its
+
+    def _set_reuse(self, pc: Any, reuse: bool) -> None:
+        pc.setReusePreconditioner(reuse)
+        self._reusing = reuse
 
     def reaction(self, facet: str, component: int) -> float:
         """Resultant (kN) of the unconstrained momentum residual on a facet group.

@@ -37,12 +37,15 @@ class Preset:
         options: PETSc options (without prefix).
         fieldsplit: the preset needs the u/p index sets and the near-nullspace.
         fixed_stress: the preset needs the fixed-stress preconditioning matrix.
+        reuse_factor_its: > 0: keep the factorisation across Newton iterations and steps as
+            GMRES's preconditioner; refactor after a solve needing more iterations than this.
     """
 
     name: str
     options: Mapping[str, Any]
     fieldsplit: bool = False
     fixed_stress: bool = False
+    reuse_factor_its: int = 0
 
 
 PRESETS: dict[str, Preset] = {
@@ -54,6 +57,23 @@ PRESETS: dict[str, Preset] = {
             "pc_factor_mat_solver_type": "mumps",
             "mat_mumps_icntl_14": 80,  # workspace increase, percent
         },
+    ),
+    # MUMPS LU reused across Newton iterations and steps as the preconditioner of GMRES on the
+    # current Jacobian: one factorisation serves many solves while the tangent changes little
+    # (consolidation, creep); a stale one (more than 20 iterations) is refactored.
+    "direct_reuse": Preset(
+        "direct_reuse",
+        {
+            "ksp_type": "gmres",
+            "ksp_rtol": 1e-10,
+            "ksp_atol": 1e-14,
+            "ksp_max_it": 60,
+            "ksp_gmres_restart": 60,
+            "pc_type": "lu",
+            "pc_factor_mat_solver_type": "mumps",
+            "mat_mumps_icntl_14": 80,
+        },
+        reuse_factor_its=20,
     ),
     "fieldsplit_gamg": Preset(
         "fieldsplit_gamg",

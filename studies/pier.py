@@ -260,7 +260,7 @@ def run_coupled(sc: Scenario, md: Any, out: Path, preset: str | None = None,
     data.update({"steps": len(run_log.steps), "rejected_steps": run_log.rejected,
                  "newton_total": run_log.newton_total,
                  "geostatic_max_u_m": run_log.geostatic_max_u,
-                 "timings_s": dict(pb.timings)})
+                 "timings_s": dict(pb.timings), "lu_factorisations": pb.refactorisations})
     if comm.rank == 0:
         write_json_atomic(out / "summary_solver.json", data)
     return data
