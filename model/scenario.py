@@ -417,7 +417,7 @@ class LinearSolver:
     for small problems.
     """
 
-    preset: Literal["auto", "direct", "fieldsplit_gamg"] = "auto"
+    preset: Literal["auto", "direct", "direct_reuse", "fieldsplit_gamg"] = "auto"
     options: dict[str, str | int | float | bool] = field(default_factory=dict)
 
 
