@@ -13,27 +13,10 @@ from pilegroup.solver.stepping import run_stages
 from pilegroup.studies import pier
 
 
-def _small(tmp_path):
-    from pilegroup.model import bundled_text
-
-    text = bundled_text("single_pile")
-    for old, new in [("size_m = 0.5", "size_m = 1.0\nn_circ_min = 8"),
-                     ("far_field_size_m = 4.0", "far_field_size_m = 8.0"),
-                     ("dz_max_m = 2.0", "dz_max_m = 4.0\ndz_surface_m = 2.0\ndz_toe_m = 2.0"),
-                     ("dz_max_deep_m = 4.0", "dz_max_deep_m = 8.0"),
-                     ("end_day = 10.0", "end_day = 2.0"),
-                     ("output_days = [0.0, 0.5, 10.0]", "output_days = [0.0, 0.5, 2.0]")]:
-        assert old in text, old
-        text = text.replace(old, new)
-    f = tmp_path / "small.toml"
-    f.write_text(text)
-    return load_scenario(str(f))
-
-
 @pytest.mark.parametrize("mode", ["tied", "viscoplastic"])
-def test_direct_reuse_matches_direct(tmp_path, monkeypatch, mode):
+def test_direct_reuse_matches_direct(tmp_path, monkeypatch, mode, small_pile):
     monkeypatch.setenv("PILEGROUP_MESH_CACHE", str(tmp_path / "cache"))
-    sc = _small(tmp_path)
+    sc = load_scenario(small_pile)
     sc = dataclasses.replace(sc, interface=dataclasses.replace(sc.interface, mode=mode))
     md = build_mesh(geometry_spec(sc), MPI.COMM_WORLD)
     out = {}

@@ -13,24 +13,6 @@ from pilegroup.studies.pier import GEOSTATIC_TOL_M
 BIN = Path(sys.executable).parent
 
 
-def small_pile(tmp_path: Path) -> str:
-    """The bundled single_pile scenario, coarsened for the fast test tier (same physics)."""
-    from pilegroup.model import bundled_text
-
-    text = bundled_text("single_pile")
-    for old, new in [("size_m = 0.5", "size_m = 1.0\nn_circ_min = 8"),
-                     ("far_field_size_m = 4.0", "far_field_size_m = 8.0"),
-                     ("dz_max_m = 2.0", "dz_max_m = 4.0\ndz_surface_m = 2.0\ndz_toe_m = 2.0"),
-                     ("dz_max_deep_m = 4.0", "dz_max_deep_m = 8.0"),
-                     ("end_day = 10.0", "end_day = 2.0"),
-                     ("output_days = [0.0, 0.5, 10.0]", "output_days = [0.0, 0.5, 2.0]")]:
-        assert old in text, old
-        text = text.replace(old, new)
-    f = tmp_path / "small_pile.toml"
-    f.write_text(text)
-    return str(f)
-
-
 @pytest.mark.parametrize("argv", [[], ["scenario"], ["scenario", "show"], ["scenario", "validate"],
                                   ["run"], ["mesh"], ["verify"], ["bench"]])
 def test_every_command_has_help(argv, capsys):
@@ -46,13 +28,13 @@ def test_verify_rejects_unknown_case(capsys):
     assert "CASE = 'nonsense'" in capsys.readouterr().err
 
 
-def test_mesh_and_run_single_pile(tmp_path, monkeypatch):
+def test_mesh_and_run_single_pile(tmp_path, monkeypatch, small_pile):
     monkeypatch.setenv("PILEGROUP_MESH_CACHE", str(tmp_path / "cache"))
-    assert main(["mesh", small_pile(tmp_path), "--out", str(tmp_path / "m"), "--no-png"]) == 0
+    assert main(["mesh", small_pile, "--out", str(tmp_path / "m"), "--no-png"]) == 0
     s = json.loads((tmp_path / "m" / "mesh_summary.json").read_text())
     assert s["cells"] > 100 and s["min_scaled_jacobian"] > 0.2 and s["shaft_groups"] == 2
     assert (tmp_path / "m" / "mesh.xdmf").is_file()
-    assert main(["run", small_pile(tmp_path), "--out", str(tmp_path / "r")]) == 0
+    assert main(["run", small_pile, "--out", str(tmp_path / "r")]) == 0
     summary = json.loads((tmp_path / "r" / "summary.json").read_text())
     assert summary["mesh"]["cells"] == s["cells"]
     assert json.loads((tmp_path / "r" / "scenario.json").read_text())["name"] == "single_pile"
@@ -73,7 +55,7 @@ def test_mesh_and_run_single_pile(tmp_path, monkeypatch):
 
 
 @pytest.mark.mpi
-def test_run_under_mpirun_gives_serial_mesh(tmp_path):
+def test_run_under_mpirun_gives_serial_mesh(tmp_path, small_pile):
     env = {"PILEGROUP_MESH_CACHE": str(tmp_path / "cache")}
     import os
 
@@ -82,7 +64,7 @@ def test_run_under_mpirun_gives_serial_mesh(tmp_path):
     for n in (1, 2):
         out = tmp_path / f"r{n}"
         r = subprocess.run([str(BIN / "mpirun"), "-n", str(n), str(BIN / "pilegroup"), "run",
-                            small_pile(tmp_path), "--out", str(out)],
+                            small_pile, "--out", str(out)],
                            capture_output=True, text=True, env=env, timeout=600)
         assert r.returncode == 0, r.stderr[-3000:]
         outs[n] = json.loads((out / "summary.json").read_text())
@@ -95,9 +77,9 @@ def test_run_under_mpirun_gives_serial_mesh(tmp_path):
     assert w2 == pytest.approx(w1, rel=1e-8)
 
 
-def test_run_stop_after_mesh(tmp_path, monkeypatch):
+def test_run_stop_after_mesh(tmp_path, monkeypatch, small_pile):
     monkeypatch.setenv("PILEGROUP_MESH_CACHE", str(tmp_path / "cache"))
-    assert main(["run", small_pile(tmp_path), "--out", str(tmp_path / "r"),
+    assert main(["run", small_pile, "--out", str(tmp_path / "r"),
                  "--stop-after", "mesh"]) == 0
     summary = json.loads((tmp_path / "r" / "summary.json").read_text())
     assert summary["stages_done"] == ["validate", "mesh"] and summary["solver"] is None
