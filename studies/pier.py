@@ -1,8 +1,10 @@
 """A scenario as a coupled Biot problem: materials, boundaries, loads, stages, outputs.
 
 The one place that maps :class:`~pilegroup.model.Scenario` onto the solver's inputs. The piles
-and cap are elastic solids; in this version they are tied to the soil (one displacement field;
-``interface.mode = "tied"``), which also bonds the cap bottom to the ground surface.
+and cap are elastic solids, either tied to the soil (one displacement field; ``interface.mode =
+"tied"``, which also bonds the cap bottom to the ground surface) or on their own displacement
+field joined to the soil by the interface law of each layer (``elastic``/``viscoplastic``; the
+cap is then not in contact with the soil).
 Boundaries (design.md section 4): bottom fixed, sides roller, ground surface drained (p = 0);
 every other boundary impermeable. The cap load is a uniform pressure on the cap top (or on the
 pile heads when there is no cap).
