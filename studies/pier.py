@@ -78,7 +78,7 @@ def build_problem(sc: Scenario, md: Any, preset: str | None = None,
             else sc.piles.count * math.pi * sc.piles.diameter_m ** 2 / 4)
     # The polygonal pile heads are slightly smaller than the circle: use the meshed area so the
     # resultant is exactly the scenario's load.
-    area = _facet_area(md, names) if sc.cap is None else area
+    area = facet_area(md, names) if sc.cap is None else area
     q = sc.total_cap_load() / area
     loads = [SurfaceLoad(f, q) for f in names]
     disc = Discretisation(sc.numerics.element)
@@ -132,7 +132,8 @@ def load_facets(sc: Scenario, md: Any) -> list[str]:
         n for n in md.facet_names if n.startswith("head_p")]
 
 
-def _facet_area(md: Any, names: list[str]) -> float:
+def facet_area(md: Any, names: list[str]) -> float:
+    """Area (m^2) of the exterior facet groups ``names`` (all ranks)."""
     import ufl
     from dolfinx import fem
 
@@ -189,7 +190,7 @@ class SettlementProbe:
         body = pb._body_of_facet(names[0])
         em = [body.emap] if body.emap is not None else None
         self._num = fem.form(-body.u[2] * dA, entity_maps=em)
-        self._area = _facet_area(md, names)
+        self._area = facet_area(md, names)
         self._comm = md.mesh.comm
         self._fem = fem
         self._sum = MPI.SUM

@@ -40,16 +40,6 @@ def _allsum(comm: Any, x: Any) -> Any:
     return comm.allreduce(x, op=MPI.SUM)
 
 
-def _facet_area(md: Any, names: list[str]) -> float:
-    import ufl
-    from dolfinx import fem
-
-    ds = ufl.Measure("ds", domain=md.mesh, subdomain_data=md.facet_tags)
-    form = sum((1.0 * ds(md.facet_tag(n)) for n in names[1:]), start=1.0 * ds(
-        md.facet_tag(names[0])))
-    return _allsum(md.mesh.comm, fem.assemble_scalar(fem.form(form)))
-
-
 def _interior_facet_area(md: Any, name: str) -> float:
     import ufl
     from dolfinx import fem
@@ -57,28 +47,6 @@ def _interior_facet_area(md: Any, name: str) -> float:
     dS = ufl.Measure("dS", domain=md.mesh, subdomain_data=md.facet_tags)
     return _allsum(md.mesh.comm, fem.assemble_scalar(
         fem.form(ufl.avg(fem.Constant(md.mesh, 1.0)) * dS(md.facet_tag(name)))))
-
-
-class _TopSettlement:
-    """Mean vertical displacement (m, down positive) over facet groups of one body."""
-
-    def __init__(self, pb: Any, names: list[str]) -> None:
-        import ufl
-        from dolfinx import fem
-
-        md = pb.md
-        ds = ufl.Measure("ds", domain=md.mesh, subdomain_data=md.facet_tags)
-        dA = sum((ds(md.facet_tag(n)) for n in names[1:]), start=ds(md.facet_tag(names[0])))
-        body = pb._body_of_facet(names[0])
-        em = [body.emap] if body.emap is not None else None
-        self._num = fem.form(-body.u[2] * dA, entity_maps=em)
-        self._area = _facet_area(md, names)
-        self._comm = md.mesh.comm
-
-    def __call__(self) -> float:
-        from dolfinx import fem
-
-        return _allsum(self._comm, fem.assemble_scalar(self._num)) / self._area
 
 
 def _pile_mesh(comm: Any, layers: tuple[tuple[str, float | None], ...], length: float,
@@ -460,6 +428,7 @@ def tied_limit(size: str = "fast", pair: str = "Q1Q1", preset: str = "direct",
         TimeStepping,
         run_stages,
     )
+    from pilegroup.studies.pier import SettlementProbe, facet_area
     from pilegroup.studies.verification import CaseResult, _comm
 
     comm = comm or _comm()
@@ -471,7 +440,7 @@ def tied_limit(size: str = "fast", pair: str = "Q1Q1", preset: str = "direct",
             "pile_1": ElasticSolid(3.0e7, 0.2)}
     stiff = PileSoilInterface(K=1.0e8, n=0.0, R_f=0.0, c=0.0, phi_deg=20.0, eta=1.0,
                               k_normal=1.0e9, delta_deg=30.0, viscous=False)
-    q = Q / _facet_area(md, ["head_p1"])
+    q = Q / facet_area(md, ["head_p1"])
     out: dict[str, Any] = {}
     for mode, coupling in (("tied", None), ("interface", InterfaceCoupling((stiff,) * 4))):
         pb = BiotProblem(
@@ -479,7 +448,7 @@ def tied_limit(size: str = "fast", pair: str = "Q1Q1", preset: str = "direct",
             pressure_bcs=[PressureBC(None)], loads=[SurfaceLoad("head_p1", q)],
             options=SolverOptions(preset=preset, prefix=f"tied_{mode}_{pair}_"),
             interface=coupling)
-        probe = _TopSettlement(pb, ["head_p1"])
+        probe = SettlementProbe(pb, pb.md, ["head_p1"])
         log = run_stages(pb, [Stage("geostatic", "geostatic"), Stage("load", "load", 0.0, 1.0)],
                          TimeStepping(), geostatic_tol=1e-4)
         det, det_z = 0, []
