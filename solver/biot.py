@@ -454,14 +454,15 @@ class BiotProblem:
         c2f = self.mesh.topology.connectivity(tdim, tdim - 1)
         sc2f = body.mesh.topology.connectivity(tdim, tdim - 1)
         out = []
-        for f in facets:
-            for c in f2c.links(f):
-                sc = body.emap.sub_topology_to_topology(np.array([c], dtype=np.int32),
-                                                        inverse=True)[0]
-                if sc >= 0:
-                    lf = int(np.flatnonzero(c2f.links(c) == f)[0])
-                    out.append(sc2f.links(sc)[lf])
-                    break
+        for k in range(2):  # each facet has one or two cells; take one inside the body
+            has = (f2c.offsets[facets + 1] - f2c.offsets[facets]) > k
+            f = facets[has]
+            c = f2c.array[f2c.offsets[f] + k]
+            sc = body.emap.sub_topology_to_topology(c.astype(np.int32), inverse=True)
+            inside = sc >= 0
+            for fi, ci, si in zip(f[inside], c[inside], sc[inside], strict=True):
+                lf = int(np.flatnonzero(c2f.links(ci) == fi)[0])
+                out.append(sc2f.links(si)[lf])
         return np.unique(np.array(out, dtype=np.int32))
 
     def _add_interface_terms(self, coupling: InterfaceCoupling, F: list, J: list,

@@ -105,11 +105,17 @@ class PileProbe:
         self._N0: dict[int, np.ndarray] = {}
 
     # ------------------------------------------------------------------ quantities
-    def axial_force(self, i: int) -> tuple[np.ndarray, np.ndarray]:
-        """(depth of the element-layer mid-heights, axial force kN) of pile ``i``."""
+    def axial_force(self, i: int, averages: dict | None = None
+                    ) -> tuple[np.ndarray, np.ndarray]:
+        """(depth of the element-layer mid-heights, axial force kN) of pile ``i``.
+
+        ``averages``: the structure's ``cell_average("stress")`` when already computed.
+        """
         levels = self._levels[i]
         cells, zc = self._pile_cells.get(i, (np.zeros(0, np.int32), np.zeros(0)))
-        avg = self.body.qp.cell_average("stress").get(f"pile_{i}")
+        if averages is None:
+            averages = self.body.qp.cell_average("stress")
+        avg = averages.get(f"pile_{i}")
         loc = np.zeros(levels.size)
         if avg is not None and cells.size:
             below = zc < 0.0  # the embedded part inside the cap is not a pile section
@@ -133,9 +139,13 @@ class PileProbe:
     def _layer_of(self, depth: np.ndarray) -> np.ndarray:
         return np.searchsorted(-self._layer_tops, depth, side="right")
 
-    def interface_profile(self, i: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(node depths, friction kPa, relative displacement m) on the shaft of pile ``i``."""
-        f = self._itf.nodal_fields()
+    def interface_profile(self, i: int, fields: dict | None = None
+                          ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(node depths, friction kPa, relative displacement m) on the shaft of pile ``i``.
+
+        ``fields``: the interface's ``nodal_fields()`` when already computed.
+        """
+        f = fields if fields is not None else self._itf.nodal_fields()
         mask = (self._node_pile == i) & (self._x[:, 2] < 0.0)
         shaft_w = self._itf.W[:, : self._itf.split.n_layers].sum(axis=1)
         mask &= shaft_w > 0
@@ -175,14 +185,16 @@ class PileProbe:
     # ------------------------------------------------------------------ recording
     def record_output(self, t: float) -> None:
         """Profiles of every pile and pile head loads at output time ``t`` (collective)."""
+        averages = self.body.qp.cell_average("stress")
+        fields = self._itf.nodal_fields() if self._itf is not None else None
         for i in range(1, len(self.xy) + 1):
-            dN, N = self.axial_force(i)
+            dN, N = self.axial_force(i, averages)
             N = N - self._N0.setdefault(i, N.copy())
             if N.size:
                 x, y = self.xy[i - 1]
                 self.load_rows.append(f"{t:.6g},{i},{x:.6g},{y:.6g},{N[0]:.9g}")
             if self._itf is not None:
-                dz, fr, rel = self.interface_profile(i)
+                dz, fr, rel = self.interface_profile(i, fields)
                 Nz = np.interp(dz, dN, N) if N.size else np.zeros_like(dz)
             else:
                 dz, Nz = dN, N
