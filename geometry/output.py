@@ -17,7 +17,7 @@ from pilegroup.geometry.convert import build_mesh, ensure_msh, gmsh_session
 from pilegroup.geometry.meshdata import MeshData
 from pilegroup.geometry.spec import GeometrySpec
 
-__all__ = ["format_summary", "mesh_command", "render_png", "write_xdmf"]
+__all__ = ["format_summary", "hex_grid", "mesh_command", "render_png", "write_xdmf"]
 
 
 def write_xdmf(md: MeshData, path: str | Path) -> Path:
@@ -47,10 +47,21 @@ def write_xdmf(md: MeshData, path: str | Path) -> Path:
     return path
 
 
-def _grid_from_msh(msh: Path) -> Any:
-    """A pyvista grid of the hexahedra in ``msh`` with cell data ``region`` (physical tag)."""
+def hex_grid(points: np.ndarray, hexes: np.ndarray) -> Any:
+    """A pyvista grid of linear hexahedra: ``points`` (n, 3) in m, ``hexes`` (m, 8) indices.
+
+    Vertex order of each hexahedron as in VTK (gmsh's and DOLFINx's XDMF order are the same).
+    """
     import pyvista as pv
 
+    hexes = np.asarray(hexes, dtype=np.int64).reshape(-1, 8)
+    cells = np.hstack([np.full((hexes.shape[0], 1), 8), hexes]).ravel()
+    return pv.UnstructuredGrid(cells, np.full(hexes.shape[0], pv.CellType.HEXAHEDRON),
+                               np.asarray(points, dtype=float).reshape(-1, 3))
+
+
+def _grid_from_msh(msh: Path) -> Any:
+    """A pyvista grid of the hexahedra in ``msh`` with cell data ``region`` (physical tag)."""
     with gmsh_session() as gmsh:
         gmsh.open(str(msh))
         tags, xyz, _ = gmsh.model.mesh.getNodes()
@@ -66,9 +77,7 @@ def _grid_from_msh(msh: Path) -> Any:
                     conns.append(index[np.asarray(en, dtype=np.int64)].reshape(-1, 8))
                     regions.append(np.full(len(et), ptag))
         gmsh.model.remove()
-    conn = np.concatenate(conns)
-    cells = np.hstack([np.full((conn.shape[0], 1), 8), conn]).ravel()
-    grid = pv.UnstructuredGrid(cells, np.full(conn.shape[0], pv.CellType.HEXAHEDRON), xyz)
+    grid = hex_grid(xyz, np.concatenate(conns))
     grid.cell_data["region"] = np.concatenate(regions)
     return grid
 
