@@ -12,7 +12,8 @@ down; forces kN; stresses kPa; displacements m):
   shaft_friction_kPa,relative_displacement_m,viscoplastic_slip_m,normal_traction_kPa`` (layer
   means on the shaft, every accepted step);
 * ``pile_loads.csv``: ``t_day,pile,x_m,y_m,head_force_kN``;
-* ``summary.json`` (may be partial; ``"complete": false`` when interrupted; ``"centre_pile"``).
+* ``summary.json`` (may be partial; ``"complete": false`` when interrupted; ``"centre_pile"``);
+* ``results*.xdmf``/``.h5`` for the 3D view (see :mod:`pilegroup.studies.view3d`).
 
 ``scenario.json``, if present, names the load stages and the layers. The end of loading is the
 last ``settlement.csv`` time in a load stage (without scenario.json: a stage whose name contains
@@ -39,6 +40,8 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from pilegroup.model import ScenarioError
+from pilegroup.studies.view3d import FILE as VIEW3D
+from pilegroup.studies.view3d import write_view3d
 
 log = logging.getLogger(__name__)
 
@@ -441,7 +444,9 @@ def save_figure(fig: Figure, path: Path) -> Path:
 def write_report(out_dir: Path) -> list[Path]:
     """Write the PNG figures of the run in ``out_dir`` to ``out_dir/plots``; return their paths.
 
-    Figures whose data are missing are skipped with a logged message.
+    The :data:`FIGURES`, then the 3D view ``view3d.png`` of the XDMF results at the last
+    output time (:mod:`pilegroup.studies.view3d`). Figures whose data are missing are skipped
+    with a logged message.
     """
     run = load_run(Path(out_dir))
     written = []
@@ -451,6 +456,10 @@ def write_report(out_dir: Path) -> list[Path]:
             continue
         written.append(save_figure(plot(run), run.out_dir / "plots" / name))
         log.info("wrote %s", written[-1])
+    view = write_view3d(run.out_dir, run.summary.get("scenario"))
+    if view is not None:
+        written.append(view)
+        log.info("wrote %s", view)
     return written
 
 
@@ -589,6 +598,8 @@ def results_markdown(out_dir: Path, figures_rel: str) -> str:
     lines += _relative_section(run)
     lines += _loads_section(run)
     figs = [(f, cap) for f, cap, needs, _ in FIGURES if _has(run, needs)]
+    if (run.out_dir / "plots" / VIEW3D).is_file():
+        figs.append((VIEW3D, "3D view: settlement at the last output time"))
     if figs:
         lines += ["### Figures", ""]
         rel = figures_rel.rstrip("/")
