@@ -8,9 +8,8 @@ import pytest  # noqa: E402
 import pilegroup  # noqa: F401
 
 
-@pytest.fixture
-def small_pile(tmp_path):
-    """The bundled single_pile scenario coarsened for the fast tier (same physics): its path."""
+def small_pile_text() -> str:
+    """The bundled single_pile scenario coarsened for the fast tier (same physics)."""
     from pilegroup.model import bundled_text
 
     text = bundled_text("single_pile")
@@ -22,6 +21,31 @@ def small_pile(tmp_path):
                      ("output_days = [0.0, 0.5, 10.0]", "output_days = [0.0, 0.5, 2.0]")]:
         assert old in text, old
         text = text.replace(old, new)
+    return text
+
+
+@pytest.fixture
+def small_pile(tmp_path):
+    """The bundled single_pile scenario coarsened for the fast tier (same physics): its path."""
     f = tmp_path / "small_pile.toml"
-    f.write_text(text)
+    f.write_text(small_pile_text())
     return str(f)
+
+
+@pytest.fixture(scope="session", params=["viscoplastic", "tied"])
+def small_pile_run(request, tmp_path_factory):
+    """Output folder of one ``run_scenario`` of ``small_pile`` per interface mode (session).
+
+    Output times 0, 0.5 and 2 days; read it, do not change it (copy it first).
+    """
+    from pilegroup.model import load_scenario
+    from pilegroup.studies.run import run_scenario
+
+    mode = request.param
+    base = tmp_path_factory.mktemp(f"small_pile_{mode}")
+    f = base / "small_pile.toml"
+    f.write_text(small_pile_text().replace('mode = "viscoplastic"', f'mode = "{mode}"'))
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("PILEGROUP_MESH_CACHE", str(base / "cache"))
+        run_scenario(load_scenario(f), base / "run")
+    return base / "run"
