@@ -423,7 +423,13 @@ class LinearSolver:
 
 @dataclass(frozen=True)
 class Numerics:
-    """Discretisation and solution controls."""
+    """Discretisation and solution controls.
+
+    Newton accepts an iterate when every block residual (soil and structure displacement, kN;
+    pressure, m^3) is at most ``newton_rtol`` times that block's reference (the largest first
+    residual of the run, for displacements also the norm of the internal force, which holds
+    the geostatic stress) plus ``newton_atol``; ``time.max_newton`` iterations at most.
+    """
 
     element: Literal["Q2Q1", "Q1Q1"] = "Q2Q1"
     newton_rtol: float = 1.0e-8

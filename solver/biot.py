@@ -402,6 +402,7 @@ class BiotProblem:
         self._matrix_key: float | None = None  # dt of the assembled matrix (linear reuse)
         self.refactorisations = 0  # LU factorisations with a reuse preset
         self._reusing = False
+        self._factor_undrained: bool | None = None  # constraint set of the kept factorisation
         self._R_run = np.zeros(len(self.fields))
         for b in self.bodies:
             b.qp.initialise({})
@@ -675,17 +676,23 @@ class BiotProblem:
         of GMRES across Newton iterations and steps (the matrix itself is always the current
         Jacobian, so Newton stays exact); a solve that needs more than ``reuse_factor_its``
         iterations, or fails, triggers a new factorisation (and a re-solve when it failed).
+        A factorisation made under another set of constraints (undrained steps release the
+        drainage conditions) is not tried at all: it is refactored at once.
         """
         t0 = time.perf_counter()
         limit = get_preset(self.options.preset).reuse_factor_its
         pc = self.ksp.getPC()
+        if limit and self._reusing and self._factor_undrained != self._undrained:
+            self._set_reuse(pc, False)
         self.ksp.solve(rhs, sol)
         if limit and self.ksp.getConvergedReason() < 0 and self._reusing:
             self._set_reuse(pc, False)  # stale factorisation: refactor and solve again
             self.ksp.solve(rhs, sol)
         its = check_reason(self.ksp, "Newton correction")
         if limit:
-            self.refactorisations += int(not self._reusing)
+            if not self._reusing:
+                self.refactorisations += 1
+                self._factor_undrained = self._undrained
             self._set_reuse(pc, its <= limit)
         self.timings["solve"] += time.perf_counter() - t0
         return its

@@ -217,8 +217,10 @@ def run_summary(problem: Any, log: Any, extra: dict[str, Any] | None = None) -> 
         "min_excess_pore_pressure_kPa": comm.allreduce(float(pl.min()) if nloc else np.inf,
                                                        op=MPI.MIN),
         "final_time_day": log.steps[-1].t if log.steps else 0.0,
+        "lu_factorisations": problem.refactorisations,
         "history": [{"stage": s.stage, "t": s.t, "dt": s.dt, "load_factor": s.load_factor,
-                     "newton": s.newton_its, "ksp": s.ksp_its} for s in log.steps],
+                     "newton": s.newton_its, "ksp": s.ksp_its, "seconds": s.seconds}
+                    for s in log.steps],
     }
     out.update(extra or {})
     return out

@@ -7,9 +7,12 @@ step, and lands exactly on milestone times (stage ends, output times).
 Stages (design.md §4):
 
 * ``geostatic``: the law states get the K0 effective stress (``SoilMaterial.k0``), the water is
-  hydrostatic (excess pressure 0); one undrained step under the buoyant weight checks the
-  equilibrium (largest displacement below ``geostatic_tol`` m, else :class:`SolverError`); then
-  displacements are reset to zero, keeping the stresses.
+  hydrostatic (excess pressure 0); one step under the buoyant weight checks the equilibrium
+  (largest displacement below ``geostatic_tol`` m, else :class:`SolverError`); then
+  displacements are reset to zero, keeping the stresses. The step has the size and drainage
+  conditions of the first step that follows (:func:`first_dt`): in equilibrium no water flows,
+  so the answer is that of an undrained check, and its Jacobian is the next step's (a reused
+  LU factorisation then serves both).
 * ``load``: load factor ramped linearly to the stage's value; ``duration = 0`` is one
   instantaneous undrained step.
 * ``consolidation``: constant load to the stage end.
@@ -131,6 +134,17 @@ class AdaptiveStepper:
         return t
 
 
+def first_dt(stages: Sequence[Stage], ts: TimeStepping) -> float:
+    """Size (day) of the first time step of ``stages``; 0 for an instantaneous load or none."""
+    for st in stages:
+        if st.kind == "geostatic":
+            continue
+        if st.kind == "load" and st.duration == 0.0:
+            return 0.0
+        return min(st.dt0 if st.dt0 is not None else ts.dt0, st.duration, ts.dt_max)
+    return 0.0
+
+
 def run_stages(
     problem: Any,
     stages: Sequence[Stage],
@@ -154,10 +168,10 @@ def run_stages(
     t = 0.0
     lam = 0.0
     t_wall = time.perf_counter()
-    for st in stages:
+    for i, st in enumerate(stages):
         if st.kind == "geostatic":
             problem.set_initial_stress(problem.geostatic_stress())
-            info = problem.solve_step(0.0, lam)
+            info = problem.solve_step(first_dt(stages[i + 1:], ts), lam)
             if not info.converged:
                 raise SolverError(f"geostatic stage {st.name!r} did not converge: "
                                   f"{info.message}")

@@ -53,6 +53,7 @@ def build_problem(sc: Scenario, md: Any, preset: str | None = None,
         Discretisation,
         DisplacementBC,
         ElasticSolid,
+        NewtonOptions,
         PressureBC,
         SoilMaterial,
         SolverOptions,
@@ -86,7 +87,9 @@ def build_problem(sc: Scenario, md: Any, preset: str | None = None,
     if p == "auto":
         p = "direct" if estimate_dofs(md, sc.numerics.element) <= DIRECT_MAX_DOFS \
             else "fieldsplit_gamg"
-    opts = SolverOptions(preset=p, overrides=dict(sc.numerics.solver.options))
+    num = sc.numerics
+    newton = NewtonOptions(rtol=num.newton_rtol, atol=num.newton_atol, max_it=num.time.max_newton)
+    opts = SolverOptions(preset=p, overrides=dict(num.solver.options), newton=newton)
     return BiotProblem(md, materials, disc, displacement_bcs=dbcs,
                        pressure_bcs=[PressureBC("ground_surface")], loads=loads, options=opts,
                        interface=interface_coupling(sc, mesh_size))
@@ -208,7 +211,7 @@ def run_coupled(sc: Scenario, md: Any, out: Path, preset: str | None = None,
     Returns the summary (also written as ``out/summary_solver.json``, atomically, at every
     output time with ``complete: false`` until the end).
     """
-    from pilegroup.solver.output import XDMFSeries
+    from pilegroup.solver.output import XDMFSeries, run_summary
     from pilegroup.solver.stepping import run_stages
 
     t0 = time.perf_counter()
@@ -259,11 +262,7 @@ def run_coupled(sc: Scenario, md: Any, out: Path, preset: str | None = None,
         bar.close()
     if series is not None:
         series.close()
-    data = summary(True)
-    data.update({"steps": len(run_log.steps), "rejected_steps": run_log.rejected,
-                 "newton_total": run_log.newton_total,
-                 "geostatic_max_u_m": run_log.geostatic_max_u,
-                 "timings_s": dict(pb.timings), "lu_factorisations": pb.refactorisations})
+    data = run_summary(pb, run_log, summary(True))
     if comm.rank == 0:
         write_json_atomic(out / "summary_solver.json", data)
     return data
