@@ -279,3 +279,16 @@ def test_strip_footing_q2_plateau_and_q1_locking():
     assert abs(q2[-1] - q2[-2]) < 0.01 * q2[-1]  # plateau
     assert prandtl < q2[-1] < 1.2 * prandtl  # coarse mesh overestimates
     assert q1[-1] > 1.35 * prandtl and q1[-1] - q1[-2] > 0.01 * q1[-1]  # locking: no plateau
+
+
+def test_geostatic_step_takes_the_next_steps_size():
+    from pilegroup.solver import Stage
+    from pilegroup.solver.stepping import first_dt
+
+    ts = TimeStepping(dt0=0.05, dt_max=10.0)
+    geo = Stage("geo", "geostatic")
+    assert first_dt([geo, Stage("load", "load", duration=1.0)][1:], ts) == 0.05
+    assert first_dt([Stage("load", "load", duration=0.01)], ts) == 0.01  # shorter stage
+    assert first_dt([Stage("load", "load", duration=2.0, dt0=0.2)], ts) == 0.2
+    assert first_dt([Stage("now", "load", duration=0.0)], ts) == 0.0  # undrained load next
+    assert first_dt([], ts) == 0.0
