@@ -15,8 +15,10 @@ minus adjacent soil settlement (positive = the pile moves down relative to the s
   interface nodes at each node level; the stations are the node levels. Tied piles have no
   slip: the relative displacement is 0 and the friction is ``(dN/dz) / (pi d)`` at the element
   layer mid-heights.
-* Layer means per pile and soil layer (``layer_history.csv``): area-weighted over the layer's
-  shaft interface nodes of that pile.
+* Layer means per pile and soil layer: area-weighted over the layer's shaft interface nodes of
+  that pile; the centre pile after every step (``layer_history.csv``), every pile at the output
+  times (``interface_layers.csv``). Normal traction: effective, kPa, tension positive;
+  viscoplastic slip: magnitude, m.
 
 Every number is all-reduced over the ranks; rank 0 writes.
 """
@@ -100,6 +102,7 @@ class PileProbe:
             self._node_pile = np.where(on.any(axis=1), np.argmax(on, axis=1) + 1, 0)
         self.profile_rows: list[str] = []
         self.layer_rows: list[str] = []
+        self.pile_layer_rows: list[str] = []
         self.load_rows: list[str] = []
         self._last_step_t: float | None = None
         self._N0: dict[int, np.ndarray] = {}
@@ -204,6 +207,8 @@ class PileProbe:
             lay = self._layer_of(dz)
             self.profile_rows += [f"{t:.6g},{i},{a:.6g},{b},{c:.9g},{e:.9g},{f:.9g}"
                                   for a, b, c, e, f in zip(dz, lay, Nz, fr, rel, strict=True)]
+            if self._itf is not None:
+                self.pile_layer_rows += self._layer_rows(t, i)
         self._write()
 
     def record_step(self, t: float) -> None:
@@ -211,19 +216,25 @@ class PileProbe:
         if self._itf is None or t == self._last_step_t:
             return
         self._last_step_t = t
-        i = self.centre
+        self.layer_rows += self._layer_rows(t, self.centre)
+
+    def _layer_rows(self, t: float, i: int) -> list[str]:
+        """CSV rows (``LAYER_COLUMNS``) of pile ``i``'s layer means at time ``t`` (collective)."""
+        rows = []
         for j, (fr, rel, vp, sn) in self.layer_means(i).items():
             lay = self.sc.layers[j - 1]
             top, bot = 0.0 - self._layer_tops[j - 1], 0.0 - self._layer_tops[j]
             bot = bot if np.isfinite(bot) else self.sc.site.depth_m
-            self.layer_rows.append(f"{t:.6g},{i},{j},{lay.name},{top:.6g},{bot:.6g},{fr:.9g},"
-                                   f"{rel:.9g},{vp:.9g},{sn:.9g}")
+            rows.append(f"{t:.6g},{i},{j},{lay.name},{top:.6g},{bot:.6g},{fr:.9g},"
+                        f"{rel:.9g},{vp:.9g},{sn:.9g}")
+        return rows
 
     def _write(self) -> None:
         if self.comm.rank != 0:
             return
         for name, head, rows in (("pile_profiles.csv", PROFILE_COLUMNS, self.profile_rows),
                                  ("pile_loads.csv", LOAD_COLUMNS, self.load_rows),
-                                 ("layer_history.csv", LAYER_COLUMNS, self.layer_rows)):
+                                 ("layer_history.csv", LAYER_COLUMNS, self.layer_rows),
+                                 ("interface_layers.csv", LAYER_COLUMNS, self.pile_layer_rows)):
             if rows:
                 write_text_atomic(self.out / name, "\n".join([head, *rows]) + "\n")

@@ -47,8 +47,15 @@ def test_mesh_and_run_single_pile(tmp_path, monkeypatch, small_pile):
     assert summary["solver"]["geostatic_max_u_m"] < GEOSTATIC_TOL_M
     for name in ("results.xdmf", "results_structure.xdmf", "results_interface.xdmf",
                  "pile_profiles.csv", "pile_loads.csv", "layer_history.csv",
-                 "plots/friction_profiles.png", "plots/settlement_time.png"):
+                 "interface_layers.csv", "plots/friction_profiles.png",
+                 "plots/settlement_time.png"):
         assert (tmp_path / "r" / name).is_file(), name
+    # per pile and layer at the output times; the centre pile's rows are its step history's
+    per_pile = (tmp_path / "r" / "interface_layers.csv").read_text().splitlines()
+    steps = (tmp_path / "r" / "layer_history.csv").read_text().splitlines()
+    assert per_pile[0] == steps[0]
+    last = [r for r in per_pile[1:] if r.startswith("2,")]
+    assert last and set(last) <= set(steps[1:])
     # the head load of the single pile is the applied load (axial force due to the load)
     loads = (tmp_path / "r" / "pile_loads.csv").read_text().splitlines()
     assert float(loads[-1].split(",")[-1]) == pytest.approx(500.0, rel=0.02)
