@@ -271,6 +271,8 @@ class InterfaceOptions:
     (hyperbolic springs only) or ``viscoplastic`` (the paper's full law). ``variant``: ``default``
     (our consistent reading) or ``seed`` (the paper's literal equations), see docs/model.md.
     The normal penalty stiffness is ``normal_stiffness_factor`` x E_layer / mesh size (kPa/m).
+    ``quadrature``: where the law is evaluated and its state lives, ``nodal`` (the interface
+    nodes) or ``gauss`` (2 x 2 Gauss points per facet, Q1Q1 only); docs/solver.md compares them.
     """
 
     mode: Literal["tied", "elastic", "viscoplastic"] = "viscoplastic"
@@ -279,6 +281,7 @@ class InterfaceOptions:
     N: float = 1.0
     normal_stiffness_factor: float = 100.0
     base: bool = True
+    quadrature: Literal["nodal", "gauss"] = "nodal"
 
     def __post_init__(self) -> None:
         _positive("N", self.N, "-")

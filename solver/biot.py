@@ -379,6 +379,15 @@ class BiotProblem:
             self._plate = {"spec": pl, "U": cU, "unit_bcs": self._bcs_zero + [unit_bc],
                            "owned": owned, "db": None, "body": self.bodies.index(b)}
             self._bcs_zero.append(fem.dirichletbc(default_scalar_type(0.0), dofs, Vc))
+            if self.interface is not None and self.interface.has_matrix:
+                # the bordering lifts the plate motion through the forms only
+                from mpi4py import MPI
+
+                hit = np.isin(dofs, self.interface.touched_dofs(b.name)).any()
+                if self.comm.allreduce(bool(hit), op=MPI.LOR):
+                    raise SolverInputError(
+                        f"RigidPlate on {pl.facet!r} moves interface nodes; allowed with "
+                        "InterfaceCoupling.quadrature = 'nodal' only")
 
         # --- PETSc objects (created once; sparsity reused)
         self.A = fpetsc.create_matrix(self._J_forms)
@@ -477,12 +486,17 @@ class BiotProblem:
         """
         import ufl
 
-        from pilegroup.solver.interface import NodalInterface
+        from pilegroup.solver.interface import GaussInterface, NodalInterface
 
         soil, struct = self.bodies
         traction0 = coupling.traction0 or self._interface_traction0
-        self.interface = itf = NodalInterface(self.md, self.split, struct.V, soil.V,
-                                              list(coupling.laws), traction0)
+        if coupling.quadrature == "gauss" and self.disc.u_degree != 1:
+            raise SolverInputError(
+                f"InterfaceCoupling.quadrature = 'gauss' with pair = {self.disc.pair!r}; "
+                "allowed: pair 'Q1Q1' (or quadrature 'nodal')")
+        cls = GaussInterface if coupling.quadrature == "gauss" else NodalInterface
+        self.interface = itf = cls(self.md, self.split, struct.V, soil.V, list(coupling.laws),
+                                   traction0)
         i_s, i_t = self._block_of(soil), self._block_of(struct)
         v_s, v_t = tests[0], tests[1]
         du_s, du_t = trials[0], trials[1]
@@ -651,6 +665,8 @@ class BiotProblem:
         self.A.zeroEntries()
         fpetsc.assemble_matrix(self.A, self._J_forms, bcs=bcs, diag=1.0)
         self.A.assemble()
+        if self.interface is not None and self.interface.has_matrix:
+            self._add_interface_matrix(bcs)
         if self._Mbeta is not None:
             from petsc4py import PETSc
 
@@ -668,6 +684,24 @@ class BiotProblem:
             self._plate["db"] = None
         self.timings["assemble_J"] += time.perf_counter() - t0
         return True
+
+    def _add_interface_matrix(self, bcs: list) -> None:
+        """Add the interface's own (non-form) tangent to ``A`` (Gauss-point quadrature)."""
+        from dolfinx import fem
+        from dolfinx.cpp.la.petsc import create_index_sets
+
+        if getattr(self, "_itf_is", None) is None:
+            self._itf_is = create_index_sets(
+                [(V.dofmap.index_map, V.dofmap.index_map_bs) for V in self._spaces])
+        i_s, i_t = self._block_of(self.bodies[0]), self._block_of(self.bodies[1])
+        by_block = fem.bcs_by_block(self._spaces, bcs)
+
+        def constrained(i: int) -> np.ndarray:
+            return np.concatenate([bc.dof_indices()[0] for bc in by_block[i]]
+                                  + [np.zeros(0, np.int32)])
+
+        self.interface.add_jacobian(self.A, self._itf_is[i_s], self._itf_is[i_t],
+                                    constrained(i_s), constrained(i_t))
 
     def _solve(self, rhs: Any, sol: Any) -> int:
         """Solve with the KSP; with a reused factorisation, refactor when it has gone stale.

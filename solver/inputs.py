@@ -132,12 +132,20 @@ class InterfaceCoupling:
         traction0: ``traction0(z, m) -> (n, 3)`` initial local traction ``[sigma_n, tau1,
             tau2]`` (kPa, compression negative) of group ``m`` at heights ``z``; ``None`` gives
             the in-situ state: ``K0 sigma'_v(z)`` on shafts, ``sigma'_v(z)`` on bases.
+        quadrature: where the law is evaluated and its state lives: ``"nodal"`` (the interface
+            nodes, Gauss-Lobatto rule; any degree) or ``"gauss"`` (the 2 x 2 Gauss points of
+            every interface facet, consistent facet tangent; Q1 displacements only). The
+            measured comparison is in docs/solver.md ("Interface quadrature").
     """
 
     laws: tuple[Any, ...]
     traction0: Callable[[Any, int], Any] | None = None
+    quadrature: Literal["nodal", "gauss"] = "nodal"
 
     def __post_init__(self) -> None:
+        if self.quadrature not in ("nodal", "gauss"):
+            raise SolverInputError(f"InterfaceCoupling.quadrature = {self.quadrature!r}; "
+                                   "allowed: 'nodal', 'gauss'")
         for m, law in enumerate(self.laws):
             if law is not None and not (hasattr(law, "update") and hasattr(law, "initial_state")):
                 raise SolverInputError(

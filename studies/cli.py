@@ -85,7 +85,7 @@ def _cmd_verify(args: argparse.Namespace) -> int:
     if unknown:
         raise ScenarioError("CASE", unknown[0], f"unknown case; known: {', '.join(CASES)}")
     res = run_cases(args.cases, size=args.size, json=args.json, pair=args.pair,
-                    preset=args.preset)
+                    preset=args.preset, quadrature=args.interface_quadrature)
     return 0 if all(r.passed for r in res) else EXIT_FAILED
 
 
@@ -189,6 +189,9 @@ def build_parser() -> argparse.ArgumentParser:
                     help="element pair (default: each case's own)")
     pv.add_argument("--preset", choices=["direct", "fieldsplit_gamg"], default=None,
                     help="linear solver option set (default: each case's own)")
+    pv.add_argument("--interface-quadrature", choices=["nodal", "gauss"], default=None,
+                    help="interface cases: law at the interface nodes or at facet Gauss "
+                    "points (default: nodal)")
     pv.set_defaults(func=_cmd_verify)
 
     pb = sub.add_parser("bench", help="benchmarks that print tables (not tests)",

@@ -126,7 +126,7 @@ def interface_coupling(sc: Scenario, mesh_size: float | None = None) -> Any:
                             "supported with interface.mode = elastic/viscoplastic", "-")
     h = mesh_size or sc.numerics.mesh.size_m
     laws = tuple(interface_law(sc, j, h) for j in range(len(sc.layers)))
-    return InterfaceCoupling(laws + laws)
+    return InterfaceCoupling(laws + laws, quadrature=sc.interface.quadrature)
 
 
 def load_facets(sc: Scenario, md: Any) -> list[str]:

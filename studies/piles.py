@@ -168,18 +168,14 @@ class PileProbe:
         """Per soil layer (1-based): mean friction, relative displacement, vp slip, sigma_n."""
         L = self._itf.split.n_layers
         acc = np.zeros((L, 5))
-        jump = self._itf._jump_committed.reshape(-1, 3)
         for m in range(L):
-            g = self._itf.groups[m]
-            nodes = g["nodes"]
-            if nodes.size == 0:
+            pts = self._itf.material_points(m)
+            st = pts["state"]
+            if st is None:
                 continue
-            sel = self._node_pile[nodes] == i
-            n = nodes[sel]
-            w = self._itf.W[n, m]
-            st = g["state"]
-            loc = np.einsum("nij,nj->ni", g["R"][sel], jump[n])
-            acc[m] += [w.sum(), w @ st["traction"][sel, 1], w @ loc[:, 1],
+            sel = self._node_pile[pts["node"]] == i
+            w = pts["weight"][sel]  # 0 where another rank owns the point
+            acc[m] += [w.sum(), w @ st["traction"][sel, 1], w @ pts["jump_local"][sel, 1],
                        w @ np.linalg.norm(st["slip_vp"][sel], axis=1),
                        w @ st["traction"][sel, 0]]
         acc = _sum(self.comm, acc)

@@ -711,11 +711,12 @@ CASES.update(INTERFACE_CASES)
 
 def run_cases(names: Sequence[str] | None = None, size: str = "fast",
               json: bool = False, out: Any = None, pair: str | None = None,
-              preset: str | None = None) -> list[CaseResult]:
+              preset: str | None = None, quadrature: str | None = None) -> list[CaseResult]:
     """Run the named cases (all when empty); print one line each, or one JSON object each.
 
     ``pair`` (``"Q2Q1"``/``"Q1Q1"``) and ``preset`` (``"direct"``/``"fieldsplit_gamg"``)
-    override the cases' defaults. Only rank 0 prints. Returns the results (on every rank).
+    override the cases' defaults; ``quadrature`` (``"nodal"``/``"gauss"``) the interface
+    quadrature of the interface cases. Only rank 0 prints. Returns the results (on every rank).
     """
     comm = _comm()
     out = out or sys.stdout
@@ -730,6 +731,8 @@ def run_cases(names: Sequence[str] | None = None, size: str = "fast",
             kw["pair"] = pair
         if preset is not None:
             kw["preset"] = preset
+        if quadrature is not None and name in INTERFACE_CASES:
+            kw["quadrature"] = quadrature
         res = CASES[name](**kw)
         results.append(res)
         if comm.rank == 0:
@@ -748,8 +751,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     ap.add_argument("--json", action="store_true")
     ap.add_argument("--pair", choices=["Q2Q1", "Q1Q1"], default=None)
     ap.add_argument("--preset", choices=["direct", "fieldsplit_gamg"], default=None)
+    ap.add_argument("--interface-quadrature", choices=["nodal", "gauss"], default=None)
     a = ap.parse_args(argv)
-    res = run_cases(a.cases, size=a.size, json=a.json, pair=a.pair, preset=a.preset)
+    res = run_cases(a.cases, size=a.size, json=a.json, pair=a.pair, preset=a.preset,
+                    quadrature=a.interface_quadrature)
     return 0 if all(r.passed for r in res) else 1
 
 

@@ -63,6 +63,8 @@ BROKEN = [
      "end of load stage"),
     ("bad-choice", 'element = "Q1Q1"  # measured faster at equal accuracy: docs/benchmarks.md',
      'element = "P3"', 1, "numerics.element", "one of"),
+    ("bad-interface-quadrature", "base = true", 'base = true\nquadrature = "lobatto"', 1,
+     "interface.quadrature", "one of 'nodal', 'gauss'"),
     ("output-after-end", "output_days = [0.0, 1.0, 30.0, 89.0, 180.0, 317.0]",
      "output_days = [0.0, 400.0]", 1, "time.output_days[1]", "end_day"),
 ]
@@ -117,6 +119,18 @@ def test_interface_parameters_required_where_piles_cross_a_layer():
     assert info.value.key == "layers[8].interface"
     d["interface"]["mode"] = "tied"
     assert scenario_from_dict(d).interface.mode == "tied"
+
+
+def test_interface_quadrature_reaches_the_solver_coupling():
+    from pilegroup.studies.pier import interface_coupling
+
+    d = _pier_dict()
+    assert "quadrature" not in d["interface"]  # optional key: the bundled scenario omits it
+    assert scenario_from_dict(d).interface.quadrature == "nodal"
+    d["interface"]["quadrature"] = "gauss"
+    sc = scenario_from_dict(d)
+    assert sc.interface.quadrature == "gauss"
+    assert interface_coupling(sc).quadrature == "gauss"
 
 
 def test_bundled_pier667_matches_paper():

@@ -1,4 +1,7 @@
-"""Interface verification cases (studies/verification_interface.py): serial and mpirun -n 2."""
+"""Interface verification cases (studies/verification_interface.py): serial and mpirun -n 2.
+
+Every case runs with both interface quadratures (law at the nodes, or at facet Gauss points).
+"""
 
 import json
 import subprocess
@@ -12,18 +15,20 @@ from pilegroup.studies import verification as ver
 
 ROOT = Path(__file__).resolve().parents[2]
 CASES = ["shaft-capacity", "interface-patch", "tied-limit"]
+QUADRATURES = ["nodal", "gauss"]
 
 
 def test_cases_are_registered():
     assert all(c in ver.CASES for c in CASES)
 
 
-def test_shaft_capacity():
-    r = ver.CASES["shaft-capacity"]()
+@pytest.mark.parametrize("quadrature", QUADRATURES)
+def test_shaft_capacity(quadrature):
+    r = ver.CASES["shaft-capacity"](quadrature=quadrature)
     d = r.details
-    assert r.error <= r.tolerance == 0.02 and r.passed
-    # every shaft node at the Drucker-Prager limit; plateau of the head load
-    assert d["shaft_nodes_at_yield"] == d["shaft_nodes"] > 0
+    assert r.error <= r.tolerance == 0.02 and r.passed and d["quadrature"] == quadrature
+    # every shaft point (node or Gauss point) at the Drucker-Prager limit; plateau of the load
+    assert d["shaft_points_at_yield"] == d["shaft_points"] > 0
     loads = [row["head_load_kN"] for row in d["rows"]]
     assert np.allclose(loads[-3:], d["capacity_actual_sigma_n_kN"], rtol=2e-4)
     # in-situ tractions lump exactly onto the closed form P_h (k L + 3 alpha K0 gamma' L^2/2)
@@ -32,20 +37,22 @@ def test_shaft_capacity():
     assert d["perimeter_m"] == pytest.approx(8 * np.sin(np.pi / 8), rel=1e-12)
 
 
-def test_interface_patch_matches_pointwise_law():
-    r = ver.CASES["interface-patch"]()
+@pytest.mark.parametrize("quadrature", QUADRATURES)
+def test_interface_patch_matches_pointwise_law(quadrature):
+    r = ver.CASES["interface-patch"](quadrature=quadrature)
     d = r.details
-    assert r.error <= r.tolerance == 1e-6 and r.passed
-    assert d["node_spread_max"] < 1e-12  # homogeneous: every interface node alike
+    assert r.error <= r.tolerance == 1e-6 and r.passed and d["quadrature"] == quadrature
+    assert d["node_spread_max"] < 1e-12  # homogeneous: every interface point alike
     assert d["creep_slip_vp_m"] > 0.01  # creep at constant shear load is exercised
     tau1 = [row["tau1"] for row in d["rows"] if row["t"] > 1.0]
     assert np.allclose(tau1, 32.0, rtol=1e-8)
 
 
-def test_tied_limit():
-    r = ver.CASES["tied-limit"]()
-    assert r.error <= r.tolerance == 0.01 and r.passed
-    assert r.error < 1e-3  # measured 5.2e-5
+@pytest.mark.parametrize("quadrature", QUADRATURES)
+def test_tied_limit(quadrature):
+    r = ver.CASES["tied-limit"](quadrature=quadrature)
+    assert r.error <= r.tolerance == 0.01 and r.passed and r.details["quadrature"] == quadrature
+    assert r.error < 1e-3  # measured 5.2e-5 (nodal), 4.6e-4 (gauss)
 
 
 def _json_lines(out):
@@ -53,10 +60,11 @@ def _json_lines(out):
 
 
 @pytest.mark.mpi
-def test_interface_cases_under_mpirun_match_serial():
+@pytest.mark.parametrize("quadrature", QUADRATURES)
+def test_interface_cases_under_mpirun_match_serial(quadrature):
     exe = str(Path(sys.executable).parent / "pilegroup")
     mpirun = str(Path(sys.executable).parent / "mpirun")
-    cmd = [exe, "verify", *CASES, "--json"]
+    cmd = [exe, "verify", *CASES, "--json", "--interface-quadrature", quadrature]
     serial = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT, timeout=600)
     par = subprocess.run([mpirun, "-n", "2", *cmd], capture_output=True, text=True, cwd=ROOT,
                          timeout=600)
@@ -65,6 +73,7 @@ def test_interface_cases_under_mpirun_match_serial():
     s, p = _json_lines(serial.stdout), _json_lines(par.stdout)
     for c in CASES:
         assert s[c]["passed"] and p[c]["passed"] and p[c]["details"]["ranks"] == 2
+        assert p[c]["details"]["quadrature"] == s[c]["details"]["quadrature"] == quadrature
         assert p[c]["dofs"] == s[c]["dofs"] and p[c]["steps"] == s[c]["steps"]
         # the errors are differences of nearly equal numbers (patch: ~1e-9, at the Newton
         # tolerance): compared in absolute terms
