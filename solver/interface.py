@@ -583,7 +583,7 @@ class GaussInterface(NodalInterface):
                            ("t", "t", 1.0)):
             Kb = sign * K * free[r][:, :, None] * free[c][:, None, :]
             sub = A.getLocalSubMatrix(iset[r], iset[c])
-            sub.setValuesLocalRCV(dofs[r], dofs[c], Kb.reshape(K.shape[0], -1),
+            sub.setValuesLocalRCV(dofs[r], dofs[c], Kb.reshape(K.shape[0], 144),
                                   addv=PETSc.InsertMode.ADD_VALUES)
             A.restoreLocalSubMatrix(iset[r], iset[c], sub)
         A.assemble()

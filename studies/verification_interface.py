@@ -62,6 +62,38 @@ def _pile_mesh(comm: Any, layers: tuple[tuple[str, float | None], ...], length: 
     return build_mesh(spec, comm, cache_dir=False)
 
 
+def shaft_profile_oscillation(itf: Any, comm: Any) -> dict[str, float]:
+    """Roughness of the shaft tractions along the pile (committed state, all shaft groups).
+
+    The material points (nodes or Gauss points) are averaged per height level (m, rounded to
+    1e-6; on a polygonal shaft every level is one ring), giving profiles ``sigma_n(z)`` and
+    ``tau1(z)`` (kPa). For each: ``tv_ratio`` = total variation ``sum |s_k+1 - s_k|`` over the
+    range ``max s - min s`` (1 for a monotonic profile, 2 for one extremum, large for a
+    zig-zag) and ``sign_changes`` of the level-to-level differences larger than 1e-6 of the
+    range.
+    """
+    L = itf.split.n_layers
+    loc = [np.zeros((0, 3))]
+    for m in range(L):
+        p = itf.material_points(m)
+        if p["state"] is None:
+            continue
+        own = p["weight"] > 0.0
+        loc.append(np.column_stack([p["x"][own, 2], p["state"]["traction"][own, :2]]))
+    a = np.concatenate(comm.allgather(np.concatenate(loc)))
+    z = np.round(a[:, 0], 6)
+    levels, inv = np.unique(z, return_inverse=True)
+    out: dict[str, float] = {"levels": float(levels.size)}
+    for k, name in ((1, "sigma_n"), (2, "tau1")):
+        prof = np.bincount(inv, a[:, k]) / np.bincount(inv)
+        d = np.diff(prof)
+        rng = float(prof.max() - prof.min()) if prof.size else 0.0
+        big = d[np.abs(d) > 1e-6 * rng] if rng > 0 else d[:0]
+        out[f"{name}_tv_ratio"] = float(np.abs(d).sum() / rng) if rng > 0 else 1.0
+        out[f"{name}_sign_changes"] = float(np.sum(np.diff(np.sign(big)) != 0))
+    return out
+
+
 def _box_bcs(DisplacementBC: Any) -> list[Any]:
     return [DisplacementBC("side_xmin", 0), DisplacementBC("side_xmax", 0),
             DisplacementBC("side_ymin", 1), DisplacementBC("side_ymax", 1),
@@ -70,7 +102,8 @@ def _box_bcs(DisplacementBC: Any) -> list[Any]:
 
 # ---------------------------------------------------------------------------- shaft capacity
 def shaft_capacity(size: str = "fast", pair: str = "Q1Q1", preset: str = "direct",
-                   comm: Any = None, quadrature: str = "nodal") -> Any:
+                   comm: Any = None, quadrature: str = "nodal",
+                   k_normal_factor: float = 1.0) -> Any:
     """Axial push of a single pile to failure of the shaft interface (drained, elastic soil).
 
     Pile d = 1 m (meshed as a regular polygon of 8 sides, fast size), L = 4 m in one soil layer
@@ -78,6 +111,11 @@ def shaft_capacity(size: str = "fast", pair: str = "Q1Q1", preset: str = "direct
     gamma_sat = 18 kN/m3, K0 = 0.8; every pressure dof fixed (drained). Stages: geostatic
     (K0 stresses, in-situ interface tractions ``sigma_n = K0 sigma'_v``), then the head facets
     ``head_p1`` pushed down 3 cm (displacement control, ramped over 1 day).
+
+    ``quadrature``: the interface quadrature (``"nodal"``/``"gauss"``); ``k_normal_factor``
+    multiplies the shaft's normal penalty (for the quadrature study, docs/solver.md); the
+    details carry the roughness of the shaft traction profiles
+    (:func:`shaft_profile_oscillation`) after the first output (3 mm) and at the end.
 
     Shaft law: :class:`PileSoilInterface` with ``viscous=True``, implicit, ``variant="default"``,
     c = 10 kPa, phi = 20 deg, ``R_f = 0`` (linear elastic slip springs, no hyperbola asymptote, so
@@ -127,7 +165,7 @@ def shaft_capacity(size: str = "fast", pair: str = "Q1Q1", preset: str = "direct
     md = _pile_mesh(comm, (("soil", None),), L, size)
     soil = SoilMaterial(LinearElastic(2.0e4, 0.3), 1e-3, 0.4, gamma_sat=gamma, K0=K0)
     shaft = PileSoilInterface(K=1.0e5, n=0.0, R_f=0.0, c=c, phi_deg=phi, eta=1e-2,
-                              k_normal=4.0e6, delta_deg=30.0, viscous=True,
+                              k_normal=4.0e6 * k_normal_factor, delta_deg=30.0, viscous=True,
                               integrator="implicit", variant="default")
     base = PileSoilInterface(K=1.0e3, n=0.0, R_f=0.0, c=c, phi_deg=phi, eta=1.0, k_normal=1.0,
                              delta_deg=30.0, viscous=False)
@@ -139,6 +177,7 @@ def shaft_capacity(size: str = "fast", pair: str = "Q1Q1", preset: str = "direct
         options=SolverOptions(preset=preset, prefix=f"shaftcap_{pair}_"),
         interface=InterfaceCoupling((shaft, base), quadrature=quadrature))
     rows: list[dict[str, float]] = []
+    osc_first: dict[str, float] = {}
     R0 = [0.0]
     sn0 = [0.0]
 
@@ -156,6 +195,8 @@ def shaft_capacity(size: str = "fast", pair: str = "Q1Q1", preset: str = "direct
             sn0[0] = _shaft_capacity_now(p)
             return
         rows.append({"t": t, "head_displacement_m": -push * t, "head_load_kN": -(R - R0[0])})
+        if len(rows) == 1:  # 3 mm push: the shaft partly elastic
+            osc_first.update(shaft_profile_oscillation(p.interface, comm))
 
     alpha, k = dp_outer_cone(c, phi)
     ts = TimeStepping(dt0=0.05, dt_max=0.05, dt_min=1e-4,
@@ -191,6 +232,9 @@ def shaft_capacity(size: str = "fast", pair: str = "Q1Q1", preset: str = "direct
                  "shaft_area_m2": area, "perimeter_m": perim, "circle_perimeter_m": math.pi,
                  "alpha": alpha, "k_kPa": k, "head_reaction_geostatic_kN": R0[0],
                  "geostatic_max_u_m": log.geostatic_max_u, "rows": rows,
+                 "k_normal_kPa_per_m": shaft.k_normal,
+                 "oscillation_first": osc_first,
+                 "oscillation_end": shaft_profile_oscillation(pb.interface, comm),
                  "rejected": log.rejected, "ranks": comm.size, "cells": md.info["num_cells"]})
 
 
@@ -455,7 +499,9 @@ def tied_limit(size: str = "fast", pair: str = "Q1Q1", preset: str = "direct",
                 det_z += [float(z) for z in pts["x"][d, 2]]
             det = _allsum(comm, det)
             det_z = sorted({round(z, 9) for zs in comm.allgather(det_z) for z in zs})
+        osc = shaft_profile_oscillation(pb.interface, comm) if pb.interface is not None else {}
         out[mode] = {"settlement_m": probe(), "dofs": pb.num_dofs, "newton": log.newton_total,
+                     "oscillation": osc,
                      "steps": len(log.steps), "detached_nodes": det,
                      "detached_z_m": det_z,
                      "geostatic_max_u_m": log.geostatic_max_u}
