@@ -109,7 +109,9 @@ class BiotProblem:
         self_weight: apply the buoyant weight (geostatic stress must then balance it).
         interface: give piles and cap their own displacement field on the structure sub-mesh,
             joined to the soil (own field on the soil sub-mesh) only by the zero-thickness
-            interface (:class:`~pilegroup.solver.interface.NodalInterface`); ``None`` ties them.
+            interface (:class:`~pilegroup.solver.interface.NodalInterface`, or
+            :class:`~pilegroup.solver.interface.GaussInterface` with ``quadrature="gauss"``);
+            ``None`` ties them.
     """
 
     def __init__(

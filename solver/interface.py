@@ -5,12 +5,18 @@ conforming parent mesh (``dolfinx.mesh.create_submesh``); they are joined only b
 terms, integrated over the parent's pile-surface facets with mixed-domain forms (``entity_maps``),
 the structure on the ``"+"`` side and the soil on the ``"-"`` side.
 
-Quadrature: nodal. The interface integrals use the Gauss-Lobatto-Legendre rule whose points are
-the Lagrange nodes of the displacement element (``quadrature_rule = "GLL"``; 2 x 2 points for Q1,
-3 x 3 for Q2), so the interface law is evaluated at the interface *nodes* and its state lives
-there. This is the classic remedy for the traction oscillations of Gauss-integrated
-zero-thickness interfaces with stiff penalties (Schellekens & de Borst 1993, IJNME 36:43-66);
-the coupling matrix between structure and soil dofs is then node-to-node.
+Quadrature (``InterfaceCoupling.quadrature``), measured against each other in docs/solver.md:
+
+* ``"nodal"`` (:class:`NodalInterface`): the interface integrals use the Gauss-Lobatto-Legendre
+  rule whose points are the Lagrange nodes of the displacement element (``quadrature_rule =
+  "GLL"``; 2 x 2 points for Q1, 3 x 3 for Q2), so the interface law is evaluated at the
+  interface *nodes* and its state lives there. This is the classic remedy for the traction
+  oscillations of Gauss-integrated zero-thickness interfaces with stiff penalties (Schellekens &
+  de Borst 1993, IJNME 36:43-66); the coupling matrix between structure and soil dofs is then
+  node-to-node.
+* ``"gauss"`` (:class:`GaussInterface`, Q1 only): the law at the 2 x 2 Gauss points of every
+  facet, the nodal forces and the consistent (facet-coupling) tangent summed over them; the
+  same GLL forms carry the nodal forces, the tangent is added to the Newton matrix directly.
 
 At a node ``i`` the interface holds one material point per *group* ``m`` it belongs to: shaft
 facets in soil layer ``j`` form group ``j``, pile bases in layer ``j`` form group ``L + j``. Each

@@ -2,12 +2,13 @@
 
 ``python -m pilegroup.studies.interface_quadrature [--scenario PATH]`` prints a markdown table
 (rank 0): for ``shaft-capacity`` with the shaft's normal penalty as used (4e6 kPa/m) and 10x,
-100x stiffer, and for ``tied-limit`` (1e9 kPa/m): the case error against its reference, Newton
-iterations, accepted and rejected steps, the roughness of the shaft traction profiles
-(:func:`~pilegroup.studies.verification_interface.shaft_profile_oscillation`: total variation
-over range, 1 = monotonic) and the wall time. With ``--scenario`` (e.g. the coarsened single
-pile of tests/conftest.py) the scenario is also run to its end with each quadrature (wall time,
-Newton iterations, rejected steps, head settlement). Results: docs/solver.md.
+100x stiffer, and for ``tied-limit`` (1e9 kPa/m, x 10, x 100): the case error against its
+reference, Newton iterations, accepted and rejected steps, the roughness of the shaft traction
+profiles (:func:`~pilegroup.studies.verification_interface.shaft_profile_oscillation`: total
+variation over range, 1 = monotonic) and the wall time. With ``--scenario`` (e.g. the coarsened
+single pile of tests/conftest.py) the scenario is also run to its end with each quadrature and
+its normal penalty factor x 1, 10, 100 (wall time, Newton iterations, rejected steps, head
+settlement, roughness). Results: docs/solver.md.
 """
 
 from __future__ import annotations
@@ -15,14 +16,19 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Sequence
-from pathlib import Path
 from typing import Any
 
 QUADRATURES = ("nodal", "gauss")
 
 
-def shaft_rows(factors: Sequence[float] = (1.0, 10.0, 100.0)) -> list[dict[str, Any]]:
-    """One row per (normal penalty factor, quadrature) of ``shaft-capacity`` and tied-limit."""
+def _row(case: str, q: str, k_normal: float, r: Any, osc: dict, **extra: Any
+         ) -> dict[str, Any]:
+    return {"case": case, "quadrature": q, "k_normal": k_normal, "error": r.error,
+            "newton": r.newton_its, "steps": r.steps, "wall_s": r.wall_s, "osc": osc, **extra}
+
+
+def case_rows(factors: Sequence[float] = (1.0, 10.0, 100.0)) -> list[dict[str, Any]]:
+    """One row per (case, normal penalty factor, quadrature): shaft-capacity and tied-limit."""
     from pilegroup.studies.verification_interface import shaft_capacity, tied_limit
 
     rows = []
@@ -30,45 +36,64 @@ def shaft_rows(factors: Sequence[float] = (1.0, 10.0, 100.0)) -> list[dict[str, 
         for q in QUADRATURES:
             r = shaft_capacity(quadrature=q, k_normal_factor=f)
             d = r.details
-            rows.append({"case": "shaft-capacity", "k_normal": d["k_normal_kPa_per_m"],
-                         "quadrature": q, "error": r.error, "newton": r.newton_its,
-                         "steps": r.steps, "rejected": d["rejected"], "wall_s": r.wall_s,
-                         "first": d["oscillation_first"], "end": d["oscillation_end"]})
-    for q in QUADRATURES:
-        r = tied_limit(quadrature=q)
-        d = r.details
-        rows.append({"case": "tied-limit", "k_normal": 1e9, "quadrature": q, "error": r.error,
-                     "newton": r.newton_its, "steps": r.steps, "rejected": 0,
-                     "wall_s": r.wall_s, "detached": d["interface_detached_nodes"],
-                     "end": d["interface_oscillation"]})
+            rows.append(_row("shaft-capacity", q, d["k_normal_kPa_per_m"], r,
+                             d["oscillation_end"], rejected=d["rejected"],
+                             detached=0))
+    for f in factors:
+        for q in QUADRATURES:
+            r = tied_limit(quadrature=q, k_normal_factor=f)
+            d = r.details
+            rows.append(_row("tied-limit", q, 1e9 * f, r, d["interface_oscillation"],
+                             rejected=0, detached=d["interface_detached_nodes"]))
     return rows
 
 
-def scenario_rows(path: str, out: Path, factors: Sequence[float] = (1.0, 10.0, 100.0)
+def scenario_rows(path: str, factors: Sequence[float] = (1.0, 10.0, 100.0)
                   ) -> list[dict[str, Any]]:
-    """Run a scenario file to its end with each interface quadrature: solver summary rows.
+    """Run a scenario file's stages with each interface quadrature (no output files).
 
-    ``factors`` multiply the scenario's ``interface.normal_stiffness_factor``.
+    ``factors`` multiply the scenario's ``interface.normal_stiffness_factor``. The problem,
+    stages and time stepping are those of ``pilegroup run`` (studies/pier.py).
     """
     import dataclasses
+    import time
 
+    from mpi4py import MPI
+
+    from pilegroup.geometry.adapter import geometry_spec
+    from pilegroup.geometry.convert import build_mesh
     from pilegroup.model import load_scenario
-    from pilegroup.studies.run import run_scenario
+    from pilegroup.solver.stepping import run_stages
+    from pilegroup.studies.pier import (
+        GEOSTATIC_TOL_M,
+        SettlementProbe,
+        build_problem,
+        load_facets,
+        solver_stages,
+        time_stepping,
+    )
+    from pilegroup.studies.verification_interface import shaft_profile_oscillation
 
+    sc0 = load_scenario(path)
+    md = build_mesh(geometry_spec(sc0), MPI.COMM_WORLD)
     rows = []
     for f in factors:
         for q in QUADRATURES:
-            sc = load_scenario(path)
-            itf = sc.interface
-            sc = dataclasses.replace(sc, interface=dataclasses.replace(
+            itf = sc0.interface
+            sc = dataclasses.replace(sc0, interface=dataclasses.replace(
                 itf, quadrature=q, normal_stiffness_factor=f * itf.normal_stiffness_factor))
-            s = run_scenario(sc, out / f"{q}_{f:g}")["solver"]
-            rows.append({"quadrature": q, "normal_stiffness_factor":
-                         sc.interface.normal_stiffness_factor, "wall_s": s["wall_s"],
-                         "newton": s["newton_total"],
-                         "steps": s["steps"], "rejected": s["rejected_steps"],
-                         "dofs": s["dofs"],
-                         "settlement_mm": 1000.0 * s["settlement_m"][-1]["settlement_m"]})
+            t0 = time.perf_counter()
+            pb = build_problem(sc, md)
+            probe = SettlementProbe(pb, md, load_facets(sc, md))
+            log = run_stages(pb, solver_stages(sc), time_stepping(sc),
+                             geostatic_tol=GEOSTATIC_TOL_M)
+            rows.append({"case": sc.name, "quadrature": q,
+                         "k_normal": sc.interface.normal_stiffness_factor, "error": None,
+                         "newton": log.newton_total, "steps": len(log.steps),
+                         "rejected": log.rejected, "wall_s": time.perf_counter() - t0,
+                         "osc": shaft_profile_oscillation(pb.interface, md.mesh.comm),
+                         "detached": None, "settlement_mm": 1000.0 * probe(),
+                         "dofs": pb.num_dofs})
     return rows
 
 
@@ -77,35 +102,30 @@ def main(argv: Sequence[str] | None = None) -> int:
     from mpi4py import MPI
 
     ap = argparse.ArgumentParser(description=__doc__)
-    ap.add_argument("--scenario", default=None, help="also run this scenario file")
-    ap.add_argument("--out", default="out/interface_quadrature")
+    ap.add_argument("--scenario", action="append", default=[],
+                    help="also run this scenario (file or bundled name); repeatable")
+    ap.add_argument("--skip-cases", action="store_true", help="only the scenarios")
     a = ap.parse_args(argv)
     rank0 = MPI.COMM_WORLD.rank == 0
-    rows = shaft_rows()
     if rank0:
-        print("| case | k_normal (kPa/m) | quadrature | error | Newton | steps | rejected | "
-              "TV ratio σn / τ1 at 3 mm | TV ratio σn / τ1 at end | wall (s) |")
-        print("| --- | ---: | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
-        for r in rows:
-            first = r.get("first")
-            f1 = (f"{first['sigma_n_tv_ratio']:.2f} / {first['tau1_tv_ratio']:.2f}"
-                  if first else "–")
-            e = r["end"]
-            print(f"| {r['case']} | {r['k_normal']:.0e} | {r['quadrature']} | {r['error']:.2e} "
-                  f"| {r['newton']} | {r['steps']} | {r['rejected']} | {f1} | "
-                  f"{e['sigma_n_tv_ratio']:.2f} / {e['tau1_tv_ratio']:.2f} | "
-                  f"{r['wall_s']:.1f} |", flush=True)
-    if a.scenario:
-        srows = scenario_rows(a.scenario, Path(a.out))
+        print("| case | k_normal | quadrature | error | settlement (mm) | Newton | steps | "
+              "rejected | detached points | TV ratio σn | TV ratio τ1 | σn / τ1 sign changes "
+              "| wall (s) |")
+        print("| --- | ---: | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: "
+              "| ---: |")
+    rows = ([] if a.skip_cases else case_rows()) + [
+        r for path in a.scenario for r in scenario_rows(path)]
+    for r in rows:
+        o = r["osc"]
+        err = f"{r['error']:.2e}" if r["error"] is not None else "–"
+        sett = f"{r['settlement_mm']:.3f}" if "settlement_mm" in r else "–"
+        det = str(r["detached"]) if r["detached"] is not None else "–"
         if rank0:
-            print(f"\nScenario {a.scenario}\n")
-            print("| normal_stiffness_factor | quadrature | DOFs | steps | rejected | Newton | "
-                  "settlement (mm) | wall (s) |")
-            print("| ---: | --- | ---: | ---: | ---: | ---: | ---: | ---: |")
-            for r in srows:
-                print(f"| {r['normal_stiffness_factor']:g} | {r['quadrature']} | {r['dofs']} | "
-                      f"{r['steps']} | {r['rejected']} | {r['newton']} | "
-                      f"{r['settlement_mm']:.4f} | {r['wall_s']:.1f} |")
+            print(f"| {r['case']} | {r['k_normal']:.3g} | {r['quadrature']} | {err} | {sett} "
+                  f"| {r['newton']} | {r['steps']} | {r['rejected']} | {det} | "
+                  f"{o['sigma_n_tv_ratio']:.2f} | {o['tau1_tv_ratio']:.2f} | "
+                  f"{o['sigma_n_sign_changes']:.0f} / {o['tau1_sign_changes']:.0f} | "
+                  f"{r['wall_s']:.1f} |", flush=True)
     return 0
 
 

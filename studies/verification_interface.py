@@ -431,7 +431,8 @@ def _mpi_max() -> Any:
 
 # ---------------------------------------------------------------------------- tied limit
 def tied_limit(size: str = "fast", pair: str = "Q1Q1", preset: str = "direct",
-               comm: Any = None, quadrature: str = "nodal") -> Any:
+               comm: Any = None, quadrature: str = "nodal",
+               k_normal_factor: float = 1.0) -> Any:
     """Very stiff elastic interface against tied piles: head settlement of a single pile.
 
     Pile d = 1 m, L = 4 m (E = 30 GPa) through two layers (0–2 m: E = 5 MPa, gamma_sat = 17,
@@ -446,7 +447,9 @@ def tied_limit(size: str = "fast", pair: str = "Q1Q1", preset: str = "direct",
     relative difference of the mean head settlements. Tolerance 1 %. The interface has no
     tensile strength: the shaft nodes of the toe ring open (by ~3e-8 m, 8 nodes at z = -4 m,
     measured) where the tied soil carries radial tension at the toe corner; their number and
-    elevations are in the details.
+    elevations are in the details. ``quadrature``: the interface quadrature;
+    ``k_normal_factor`` multiplies k_normal (quadrature study, docs/solver.md); the details
+    carry the roughness of the shaft traction profiles (:func:`shaft_profile_oscillation`).
     """
     from pilegroup.constitutive.interface import PileSoilInterface
     from pilegroup.constitutive.soil import LinearElastic
@@ -475,7 +478,7 @@ def tied_limit(size: str = "fast", pair: str = "Q1Q1", preset: str = "direct",
             "soil_layer_02": SoilMaterial(LinearElastic(2.0e4, 0.3), 1e-3, 0.4, 19.0, K0=0.6),
             "pile_1": ElasticSolid(3.0e7, 0.2)}
     stiff = PileSoilInterface(K=1.0e8, n=0.0, R_f=0.0, c=0.0, phi_deg=20.0, eta=1.0,
-                              k_normal=1.0e9, delta_deg=30.0, viscous=False)
+                              k_normal=1.0e9 * k_normal_factor, delta_deg=30.0, viscous=False)
     q = Q / facet_area(md, ["head_p1"])
     out: dict[str, Any] = {}
     for mode, coupling in (("tied", None), ("interface", InterfaceCoupling(
