@@ -28,8 +28,14 @@ def test_verify_rejects_unknown_case(capsys):
     assert "CASE = 'nonsense'" in capsys.readouterr().err
 
 
-def test_mesh_and_run_single_pile(tmp_path, monkeypatch, small_pile):
+@pytest.mark.parametrize("quadrature", ["nodal", "gauss"])
+def test_mesh_and_run_single_pile(tmp_path, monkeypatch, small_pile, quadrature):
     monkeypatch.setenv("PILEGROUP_MESH_CACHE", str(tmp_path / "cache"))
+    if quadrature != "nodal":  # the interface law at facet Gauss points: same outputs
+        text = Path(small_pile).read_text()
+        assert 'mode = "viscoplastic"\n' in text
+        Path(small_pile).write_text(text.replace(
+            'mode = "viscoplastic"\n', f'mode = "viscoplastic"\nquadrature = "{quadrature}"\n'))
     assert main(["mesh", small_pile, "--out", str(tmp_path / "m"), "--no-png"]) == 0
     s = json.loads((tmp_path / "m" / "mesh_summary.json").read_text())
     assert s["cells"] > 100 and s["min_scaled_jacobian"] > 0.2 and s["shaft_groups"] == 2
@@ -37,7 +43,9 @@ def test_mesh_and_run_single_pile(tmp_path, monkeypatch, small_pile):
     assert main(["run", small_pile, "--out", str(tmp_path / "r")]) == 0
     summary = json.loads((tmp_path / "r" / "summary.json").read_text())
     assert summary["mesh"]["cells"] == s["cells"]
-    assert json.loads((tmp_path / "r" / "scenario.json").read_text())["name"] == "single_pile"
+    resolved = json.loads((tmp_path / "r" / "scenario.json").read_text())
+    assert resolved["name"] == "single_pile"
+    assert resolved["interface"]["quadrature"] == quadrature
     hist = summary["solver"]["settlement_m"]
     assert [h["t_day"] for h in hist] == [0.0, 0.5, 2.0]
     # the pile settles under load and keeps settling while the soil consolidates
