@@ -414,6 +414,7 @@ class BiotProblem:
         self.refactorisations = 0  # LU factorisations with a reuse preset
         self._reusing = False
         self._factor_undrained: bool | None = None  # constraint set of the kept factorisation
+        self._itf_is: Any = None  # block index sets for the interface's own matrix (Gauss)
         self._R_run = np.zeros(len(self.fields))
         for b in self.bodies:
             b.qp.initialise({})
@@ -692,7 +693,7 @@ class BiotProblem:
         from dolfinx import fem
         from dolfinx.cpp.la.petsc import create_index_sets
 
-        if getattr(self, "_itf_is", None) is None:
+        if self._itf_is is None:
             self._itf_is = create_index_sets(
                 [(V.dofmap.index_map, V.dofmap.index_map_bs) for V in self._spaces])
         i_s, i_t = self._block_of(self.bodies[0]), self._block_of(self.bodies[1])
