@@ -34,6 +34,7 @@ a positive t1 is an upward (supporting) shear on the pile.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -400,6 +401,11 @@ class NodalInterface:
                 np.add.at(out[key], nodes, w * val)
         return out
 
+    @functools.cached_property
+    def _soil_coords(self) -> np.ndarray:
+        """Coordinates (m) of the soil displacement nodes (local numbering)."""
+        return self.V_soil.tabulate_dof_coordinates()
+
     def material_points(self, m: int) -> dict[str, np.ndarray | Any]:
         """The committed material points of group ``m`` (here: its interface nodes).
 
@@ -413,7 +419,7 @@ class NodalInterface:
         own = nodes < self.V_soil.dofmap.index_map.size_local
         jump = self._jump_committed.reshape(-1, 3)[nodes]
         return {"weight": np.where(own, self.W[nodes, m], 0.0),
-                "x": self.V_soil.tabulate_dof_coordinates()[nodes], "node": nodes,
+                "x": self._soil_coords[nodes], "node": nodes,
                 "state": g["state"], "jump_local": np.einsum("nij,nj->ni", g["R"], jump)}
 
     def reset_jump(self) -> None:

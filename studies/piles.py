@@ -164,22 +164,26 @@ class PileProbe:
         wsum = np.where(acc[0] > 0, acc[0], 1.0)
         return -allz, acc[1] / wsum, acc[2] / wsum
 
-    def layer_means(self, i: int) -> dict[int, tuple[float, float, float, float]]:
-        """Per soil layer (1-based): mean friction, relative displacement, vp slip, sigma_n."""
-        L = self._itf.split.n_layers
-        acc = np.zeros((L, 5))
+    def layer_means(self) -> dict[int, dict[int, tuple[float, float, float, float]]]:
+        """Per pile and layer (1-based): mean friction, relative displacement, vp slip, sigma_n.
+
+        One pass over the interface's material points and one all-reduce for all piles.
+        """
+        L, P = self._itf.split.n_layers, len(self.xy)
+        acc = np.zeros((P + 1, L, 5))  # row 0: points on no pile
         for m in range(L):
             pts = self._itf.material_points(m)
             st = pts["state"]
             if st is None:
                 continue
-            sel = self._node_pile[pts["node"]] == i
-            w = pts["weight"][sel]  # 0 where another rank owns the point
-            acc[m] += [w.sum(), w @ st["traction"][sel, 1], w @ pts["jump_local"][sel, 1],
-                       w @ np.linalg.norm(st["slip_vp"][sel], axis=1),
-                       w @ st["traction"][sel, 0]]
+            w = pts["weight"]  # 0 where another rank owns the point
+            vals = np.column_stack([w, w * st["traction"][:, 1], w * pts["jump_local"][:, 1],
+                                    w * np.linalg.norm(st["slip_vp"], axis=1),
+                                    w * st["traction"][:, 0]])
+            np.add.at(acc[:, m], self._node_pile[pts["node"]], vals)
         acc = _sum(self.comm, acc)
-        return {m + 1: tuple(acc[m, 1:] / acc[m, 0]) for m in range(L) if acc[m, 0] > 0}
+        return {i: {m + 1: tuple(acc[i, m, 1:] / acc[i, m, 0]) for m in range(L)
+                    if acc[i, m, 0] > 0} for i in range(1, P + 1)}
 
     # ------------------------------------------------------------------ recording
     def record_output(self, t: float) -> None:
@@ -203,8 +207,10 @@ class PileProbe:
             lay = self._layer_of(dz)
             self.profile_rows += [f"{t:.6g},{i},{a:.6g},{b},{c:.9g},{e:.9g},{f:.9g}"
                                   for a, b, c, e, f in zip(dz, lay, Nz, fr, rel, strict=True)]
-            if self._itf is not None:
-                self.pile_layer_rows += self._layer_rows(t, i)
+        if self._itf is not None:
+            means = self.layer_means()
+            for i in range(1, len(self.xy) + 1):
+                self.pile_layer_rows += self._layer_rows(t, i, means[i])
         self._write()
 
     def record_step(self, t: float) -> None:
@@ -212,12 +218,12 @@ class PileProbe:
         if self._itf is None or t == self._last_step_t:
             return
         self._last_step_t = t
-        self.layer_rows += self._layer_rows(t, self.centre)
+        self.layer_rows += self._layer_rows(t, self.centre, self.layer_means()[self.centre])
 
-    def _layer_rows(self, t: float, i: int) -> list[str]:
-        """CSV rows (``LAYER_COLUMNS``) of pile ``i``'s layer means at time ``t`` (collective)."""
+    def _layer_rows(self, t: float, i: int, means: dict) -> list[str]:
+        """CSV rows (``LAYER_COLUMNS``) of pile ``i``'s layer ``means`` at time ``t``."""
         rows = []
-        for j, (fr, rel, vp, sn) in self.layer_means(i).items():
+        for j, (fr, rel, vp, sn) in means.items():
             lay = self.sc.layers[j - 1]
             top, bot = 0.0 - self._layer_tops[j - 1], 0.0 - self._layer_tops[j]
             bot = bot if np.isfinite(bot) else self.sc.site.depth_m
