@@ -293,7 +293,7 @@ class BiotProblem:
         for ld in self.loads:
             c = fem.Constant(mesh, default_scalar_type(0.0))
             self._load_consts.append((ld, c))
-            i = self._block_of(self._body_of_facet(ld.facet))
+            i = self._block_of(self.body_of_facet(ld.facet))
             F[i] += c * ufl.inner(nrm, tests[self._body_index(i)]) * ds(md.facet_tag(ld.facet))
         S, mob, dt = self._S, self._mob, self.dt
         F[1] = (S * (p - p_n) + ufl.div(u - u_n)) * q * dx + dt * mob * ufl.inner(
@@ -343,7 +343,7 @@ class BiotProblem:
         for bc in self.displacement_bcs:
             if bc.component not in (0, 1, 2):
                 raise SolverInputError(f"DisplacementBC.component = {bc.component}; allowed 0-2")
-            b = self._body_of_facet(bc.facet)
+            b = self.body_of_facet(bc.facet)
             dofs = self._facet_dofs(b, bc.facet, bc.component)
             c = fem.Constant(mesh, default_scalar_type(0.0))
             self._u_bc_consts.append((bc, c))
@@ -369,7 +369,7 @@ class BiotProblem:
         self._plate = None
         if self.plates:
             pl = self.plates[0]
-            b = self._body_of_facet(pl.facet)
+            b = self.body_of_facet(pl.facet)
             dofs = self._facet_dofs(b, pl.facet, pl.component)
             Vc = b.V.sub(pl.component)
             cU = fem.Constant(mesh, default_scalar_type(0.0))
@@ -427,7 +427,7 @@ class BiotProblem:
     def _body_index(self, block: int) -> int:
         return 0 if block == 0 else block - 1
 
-    def _body_of_facet(self, name: str) -> Body:
+    def body_of_facet(self, name: str) -> Body:
         """The body whose cells carry the facet group ``name`` (collective)."""
         from mpi4py import MPI
 
@@ -450,10 +450,10 @@ class BiotProblem:
         fdim = self.mesh.topology.dim - 1
         facets = self.md.facet_tags.find(self.md.facet_tag(name))
         if body.emap is not None:
-            facets = self._sub_facets(body, facets)
+            facets = self.sub_facets(body, facets)
         return fem.locate_dofs_topological(body.V.sub(component), fdim, facets)
 
-    def _sub_facets(self, body: Body, facets: np.ndarray) -> np.ndarray:
+    def sub_facets(self, body: Body, facets: np.ndarray) -> np.ndarray:
         """Parent facets -> facets of ``body``'s sub-mesh (through an adjacent body cell).
 
         ``create_submesh`` keeps each cell's vertex order, so a facet has the same local index
@@ -745,7 +745,7 @@ class BiotProblem:
         state: the reaction of the constraint, ``int sigma_total . n`` over the facets (tension
         positive).
         """
-        b = self._body_of_facet(facet)
+        b = self.body_of_facet(facet)
         dofs = self._facet_dofs(b, facet, component)
         owned = dofs[dofs < b.V.dofmap.index_map.size_local * 3]
         return self._resultant(owned, self.bodies.index(b))

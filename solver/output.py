@@ -128,7 +128,7 @@ class _InterfaceSeries:
         soil = problem.bodies[0]
         names = [n for n in problem.md.facet_names if n.startswith(("shaft_", "base_"))]
         facets = np.unique(np.concatenate(
-            [problem._sub_facets(soil, problem.md.facet_tags.find(problem.md.facet_tag(n)))
+            [problem.sub_facets(soil, problem.md.facet_tags.find(problem.md.facet_tag(n)))
              for n in names]))
         tdim = soil.mesh.topology.dim
         fmesh, _, vmap, _ = dmesh.create_submesh(soil.mesh, tdim - 1, facets)

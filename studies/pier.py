@@ -20,6 +20,7 @@ from typing import Any
 
 from pilegroup.fileio import write_json_atomic, write_text_atomic
 from pilegroup.model import Scenario, ScenarioError
+from pilegroup.solver.probes import SettlementProbe, facet_area
 
 log = logging.getLogger(__name__)
 
@@ -135,18 +136,6 @@ def load_facets(sc: Scenario, md: Any) -> list[str]:
         n for n in md.facet_names if n.startswith("head_p")]
 
 
-def facet_area(md: Any, names: list[str]) -> float:
-    """Area (m^2) of the exterior facet groups ``names`` (all ranks)."""
-    import ufl
-    from dolfinx import fem
-
-    ds = ufl.Measure("ds", domain=md.mesh, subdomain_data=md.facet_tags)
-    form = sum((1.0 * ds(md.facet_tag(n)) for n in names), start=0.0 * ds)
-    from mpi4py import MPI
-
-    return md.mesh.comm.allreduce(fem.assemble_scalar(fem.form(form)), op=MPI.SUM)
-
-
 def estimate_dofs(md: Any, element: str) -> int:
     """Rough global unknown count of the u-p problem (vertices, or Q2 nodes ~ 8 x vertices)."""
     nv = md.mesh.topology.index_map(0).size_global
@@ -180,30 +169,6 @@ def time_stepping(sc: Scenario) -> Any:
                         milestones=tuple(x for x in sc.time.output_days if x > 0))
 
 
-class SettlementProbe:
-    """Mean vertical displacement (m, down positive) of the loaded top (cap top or pile heads)."""
-
-    def __init__(self, pb: Any, md: Any, names: list[str]) -> None:
-        import ufl
-        from dolfinx import fem
-        from mpi4py import MPI
-
-        ds = ufl.Measure("ds", domain=md.mesh, subdomain_data=md.facet_tags)
-        dA = sum((ds(md.facet_tag(n)) for n in names[1:]), start=ds(md.facet_tag(names[0])))
-        body = pb._body_of_facet(names[0])
-        em = [body.emap] if body.emap is not None else None
-        self._num = fem.form(-body.u[2] * dA, entity_maps=em)
-        self._area = facet_area(md, names)
-        self._comm = md.mesh.comm
-        self._fem = fem
-        self._sum = MPI.SUM
-
-    def __call__(self) -> float:
-        """Current settlement, m (down positive), all-reduced."""
-        val = self._fem.assemble_scalar(self._num)
-        return self._comm.allreduce(val, op=self._sum) / self._area
-
-
 def run_coupled(sc: Scenario, md: Any, out: Path, preset: str | None = None,
                 mesh_size: float | None = None) -> dict[str, Any]:
     """Run every stage of ``sc`` on ``md``; write results.xdmf, settlement CSV and summary.
@@ -218,7 +183,7 @@ def run_coupled(sc: Scenario, md: Any, out: Path, preset: str | None = None,
     from pilegroup.studies.piles import PileProbe
 
     pb = build_problem(sc, md, preset, mesh_size)
-    probe = SettlementProbe(pb, md, load_facets(sc, md))
+    probe = SettlementProbe(pb, load_facets(sc, md))
     piles = PileProbe(sc, pb, out)
     series = XDMFSeries(pb, out / "results.xdmf") if sc.outputs.xdmf else None
     history: list[tuple[float, str, float]] = []

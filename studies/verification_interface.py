@@ -467,7 +467,7 @@ def tied_limit(size: str = "fast", pair: str = "Q1Q1", preset: str = "direct",
         TimeStepping,
         run_stages,
     )
-    from pilegroup.studies.pier import SettlementProbe, facet_area
+    from pilegroup.solver.probes import SettlementProbe, facet_area
     from pilegroup.studies.verification import CaseResult, _comm
 
     comm = comm or _comm()
@@ -488,7 +488,7 @@ def tied_limit(size: str = "fast", pair: str = "Q1Q1", preset: str = "direct",
             pressure_bcs=[PressureBC(None)], loads=[SurfaceLoad("head_p1", q)],
             options=SolverOptions(preset=preset, prefix=f"tied_{mode}_{pair}_"),
             interface=coupling)
-        probe = SettlementProbe(pb, pb.md, ["head_p1"])
+        probe = SettlementProbe(pb, ["head_p1"])
         log = run_stages(pb, [Stage("geostatic", "geostatic"), Stage("load", "load", 0.0, 1.0)],
                          TimeStepping(), geostatic_tol=1e-4)
         det, det_z = 0, []

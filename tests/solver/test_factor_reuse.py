@@ -9,6 +9,7 @@ from mpi4py import MPI
 from pilegroup.geometry.adapter import geometry_spec
 from pilegroup.geometry.convert import build_mesh
 from pilegroup.model import load_scenario
+from pilegroup.solver.probes import SettlementProbe
 from pilegroup.solver.stepping import run_stages
 from pilegroup.studies import pier
 
@@ -22,7 +23,7 @@ def test_direct_reuse_matches_direct(tmp_path, monkeypatch, mode, small_pile):
     out = {}
     for preset in ("direct", "direct_reuse"):
         pb = pier.build_problem(sc, md, preset)
-        probe = pier.SettlementProbe(pb, md, pier.load_facets(sc, md))
+        probe = SettlementProbe(pb, pier.load_facets(sc, md))
         log = run_stages(pb, pier.solver_stages(sc), pier.time_stepping(sc),
                          geostatic_tol=pier.GEOSTATIC_TOL_M)
         out[preset] = (probe(), log.newton_total, pb.refactorisations)

@@ -1,0 +1,150 @@
+"""Mesh physical groups: the one module that formats and parses their names and tag values.
+
+Every builder names its groups through these functions and every reader (solver inputs built by
+the studies, outputs, reports) parses them here, so the string contract lives in one place.
+
+====================  =====  ===========  ==============================================
+name                  dim    tag          what
+====================  =====  ===========  ==============================================
+soil_layer_{jj:02d}   3      jj           soil of layer jj (1-based, top down)
+pile_{i}              3      100 + i      pile i (1-based, spec order), incl. embedded part
+cap                   3      300          the cap (minus the embedded pile heads)
+side_xmin/xmax        2      1 / 2        block sides x = min, max
+side_ymin/ymax        2      3 / 4        block sides y = min, max
+bottom                2      5            z = -depth
+ground_surface        2      6            soil top (z = 0) not under the cap or a pile
+cap_bottom            2      7            cap bottom facets touching soil (z = 0)
+cap_top               2      8            cap top, z = cap thickness
+cap_side              2      9            cap vertical sides
+base_p{i}             2      100 + i      pile toe facets (pile / soil), z = -L_i
+head_p{i}             2      400 + i      pile head on the ground (only without a cap)
+embed_p{i}            2      700 + i      pile / cap facets (embedded part: sides and top)
+shaft_p{i}_l{jj:02d}  2      1000 i + jj  pile i shaft in layer jj (pile / soil facets)
+====================  =====  ===========  ==============================================
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Iterable
+
+CAP = "cap"
+CAP_TAG = 300
+SIDES = ("side_xmin", "side_xmax", "side_ymin", "side_ymax")
+BOTTOM = "bottom"
+GROUND = "ground_surface"
+CAP_BOTTOM, CAP_TOP, CAP_SIDE = "cap_bottom", "cap_top", "cap_side"
+#: Fixed facet tags of the named block and cap faces.
+FACET_TAGS = {"side_xmin": 1, "side_xmax": 2, "side_ymin": 3, "side_ymax": 4, BOTTOM: 5,
+              GROUND: 6, CAP_BOTTOM: 7, CAP_TOP: 8, CAP_SIDE: 9}
+
+_SOIL = re.compile(r"soil_layer_(\d+)$")
+_PILE = re.compile(r"pile_(\d+)$")
+_SHAFT = re.compile(r"shaft_p(\d+)_l(\d+)$")
+_BASE = re.compile(r"base_p(\d+)$")
+_HEAD = re.compile(r"head_p(\d+)$")
+
+
+def soil_layer(j: int) -> str:
+    """Cell group of soil layer ``j`` (1-based, top down)."""
+    return f"soil_layer_{j:02d}"
+
+
+def soil_layer_tag(j: int) -> int:
+    """Cell tag of soil layer ``j`` (1-based)."""
+    return j
+
+
+def pile(i: int) -> str:
+    """Cell group of pile ``i`` (1-based)."""
+    return f"pile_{i}"
+
+
+def pile_tag(i: int) -> int:
+    """Cell tag of pile ``i`` (1-based)."""
+    return 100 + i
+
+
+def shaft(i: int, j: int) -> str:
+    """Facet group of pile ``i``'s shaft in soil layer ``j`` (both 1-based)."""
+    return f"shaft_p{i}_l{j:02d}"
+
+
+def shaft_tag(i: int, j: int) -> int:
+    """Facet tag of :func:`shaft`."""
+    return 1000 * i + j
+
+
+def base(i: int) -> str:
+    """Facet group of pile ``i``'s toe (pile / soil facets)."""
+    return f"base_p{i}"
+
+
+def base_tag(i: int) -> int:
+    """Facet tag of :func:`base`."""
+    return 100 + i
+
+
+def head(i: int) -> str:
+    """Facet group of pile ``i``'s head on the ground (no cap)."""
+    return f"head_p{i}"
+
+
+def head_tag(i: int) -> int:
+    """Facet tag of :func:`head`."""
+    return 400 + i
+
+
+def embed(i: int) -> str:
+    """Facet group of pile ``i``'s facets embedded in the cap."""
+    return f"embed_p{i}"
+
+
+def embed_tag(i: int) -> int:
+    """Facet tag of :func:`embed`."""
+    return 700 + i
+
+
+def layer_of(name: str) -> int | None:
+    """Soil layer (1-based) of a ``soil_layer_NN`` cell group, else ``None``."""
+    m = _SOIL.match(name)
+    return int(m.group(1)) if m else None
+
+
+def pile_of(name: str) -> int | None:
+    """Pile number of a ``pile_i`` cell group, else ``None``."""
+    m = _PILE.match(name)
+    return int(m.group(1)) if m else None
+
+
+def is_structure(name: str) -> bool:
+    """A cell group of the structure (a pile or the cap)."""
+    return name == CAP or pile_of(name) is not None
+
+
+def shaft_of(name: str) -> tuple[int, int] | None:
+    """(pile, layer) of a ``shaft_p{i}_l{jj}`` facet group, else ``None``."""
+    m = _SHAFT.match(name)
+    return (int(m.group(1)), int(m.group(2))) if m else None
+
+
+def base_of(name: str) -> int | None:
+    """Pile of a ``base_p{i}`` facet group, else ``None``."""
+    m = _BASE.match(name)
+    return int(m.group(1)) if m else None
+
+
+def head_of(name: str) -> int | None:
+    """Pile of a ``head_p{i}`` facet group, else ``None``."""
+    m = _HEAD.match(name)
+    return int(m.group(1)) if m else None
+
+
+def is_interface(name: str) -> bool:
+    """A pile-soil interface facet group (a shaft or a base)."""
+    return shaft_of(name) is not None or base_of(name) is not None
+
+
+def heads(names: Iterable[str]) -> list[str]:
+    """The pile-head facet groups among ``names`` (in the given order)."""
+    return [n for n in names if head_of(n) is not None]
