@@ -5,8 +5,14 @@ and loads; run :func:`run_stages` over a list of :class:`Stage` with :class:`Tim
 Units kN, m, day; tension positive; ``p`` = excess pore pressure (compression positive).
 """
 
-from pilegroup.solver.biot import BiotProblem, StepInfo, eps_mandel
 from pilegroup.solver.errors import ConvergenceError, SolverError, SolverInputError, StepFailure
+from pilegroup.solver.exports import (
+    Export,
+    SettlementSeries,
+    SummaryWriter,
+    XDMFSeries,
+    run_summary,
+)
 from pilegroup.solver.inputs import (
     GAMMA_W,
     K_WATER,
@@ -23,7 +29,10 @@ from pilegroup.solver.inputs import (
     SurfaceLoad,
     TimeStepping,
 )
+from pilegroup.solver.layout import eps_mandel
 from pilegroup.solver.linsolve import PRESETS, Preset, merged_options
+from pilegroup.solver.newton import StepInfo
+from pilegroup.solver.problem import BiotProblem
 from pilegroup.solver.stepping import AdaptiveStepper, RunLog, StepRecord, run_stages
 
 __all__ = [
@@ -36,12 +45,14 @@ __all__ = [
     "Discretisation",
     "DisplacementBC",
     "ElasticSolid",
+    "Export",
     "InterfaceCoupling",
     "NewtonOptions",
     "Preset",
     "PressureBC",
     "RigidPlate",
     "RunLog",
+    "SettlementSeries",
     "SoilMaterial",
     "SolverError",
     "SolverInputError",
@@ -50,9 +61,12 @@ __all__ = [
     "StepFailure",
     "StepInfo",
     "StepRecord",
+    "SummaryWriter",
     "SurfaceLoad",
     "TimeStepping",
+    "XDMFSeries",
     "eps_mandel",
     "merged_options",
     "run_stages",
+    "run_summary",
 ]

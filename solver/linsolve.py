@@ -25,6 +25,9 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
+from mpi4py import MPI
+from petsc4py import PETSc
+
 from pilegroup.solver.errors import ConvergenceError, SolverInputError
 
 
@@ -119,16 +122,16 @@ def merged_options(name: str, overrides: Mapping[str, Any] | None = None) -> dic
 
 
 def create_ksp(
-    comm: Any,
-    A: Any,
-    P: Any,
+    comm: MPI.Comm,
+    A: PETSc.Mat,
+    P: PETSc.Mat | None,
     prefix: str,
     preset: str,
     overrides: Mapping[str, Any] | None = None,
-    is_u: Any = None,
-    is_p: Any = None,
-    near_nullspace: Any = None,
-) -> Any:
+    is_u: PETSc.IS | None = None,
+    is_p: PETSc.IS | None = None,
+    near_nullspace: PETSc.NullSpace | None = None,
+) -> PETSc.KSP:
     """Create a KSP with operators ``A`` (and preconditioning matrix ``P``) from a preset.
 
     Args:
@@ -142,8 +145,6 @@ def create_ksp(
         is_p: pressure index set (fieldsplit presets).
         near_nullspace: rigid-body modes of the displacement block (fieldsplit presets).
     """
-    from petsc4py import PETSc
-
     spec = get_preset(preset)
     opts = PETSc.Options()
     for k, v in merged_options(preset, overrides).items():
@@ -163,9 +164,53 @@ def create_ksp(
     return ksp
 
 
-def check_reason(ksp: Any, what: str = "linear solve") -> int:
+def check_reason(ksp: PETSc.KSP, what: str = "linear solve") -> int:
     """Raise :class:`ConvergenceError` when the KSP diverged; return its iteration count."""
     reason = ksp.getConvergedReason()
     if reason < 0:
         raise ConvergenceError(f"{what}: KSP diverged, reason {reason}")
     return int(ksp.getIterationNumber())
+
+
+class LinearSolver:
+    """The problem's KSP; with a reuse preset, one LU factorisation serves many solves.
+
+    Presets with ``reuse_factor_its`` keep the last LU factorisation as the preconditioner of
+    GMRES across Newton iterations and steps (the matrix itself is always the current Jacobian,
+    so Newton stays exact); a solve that needs more than ``reuse_factor_its`` iterations, or
+    fails, triggers a new factorisation (and a re-solve when it failed). A factorisation made
+    under another set of constraints (undrained steps release the drainage conditions) is not
+    tried at all: it is refactored at once.
+    """
+
+    def __init__(self, ksp: PETSc.KSP, preset: str) -> None:
+        self.ksp = ksp
+        self.limit = get_preset(preset).reuse_factor_its
+        self.refactorisations = 0  # LU factorisations with a reuse preset
+        self._reusing = False
+        self._factor_undrained: bool | None = None  # constraints of the kept factorisation
+
+    def set_operators(self, A: PETSc.Mat, P: PETSc.Mat | None) -> None:
+        """Use ``A`` (and ``P`` to precondition, else ``A``)."""
+        self.ksp.setOperators(A, P if P is not None else A)
+
+    def _set_reuse(self, reuse: bool) -> None:
+        self.ksp.getPC().setReusePreconditioner(reuse)
+        self._reusing = reuse
+
+    def solve(self, rhs: PETSc.Vec, sol: PETSc.Vec, undrained: bool) -> int:
+        """Solve ``A sol = rhs``; returns the Krylov iterations (raises when diverged)."""
+        limit = self.limit
+        if limit and self._reusing and self._factor_undrained != undrained:
+            self._set_reuse(False)
+        self.ksp.solve(rhs, sol)
+        if limit and self.ksp.getConvergedReason() < 0 and self._reusing:
+            self._set_reuse(False)  # stale factorisation: refactor and solve again
+            self.ksp.solve(rhs, sol)
+        its = check_reason(self.ksp, "Newton correction")
+        if limit:
+            if not self._reusing:
+                self.refactorisations += 1
+                self._factor_undrained = undrained
+            self._set_reuse(its <= limit)
+        return its

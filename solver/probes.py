@@ -15,7 +15,7 @@ from mpi4py import MPI
 from pilegroup.geometry.meshdata import MeshData
 
 if TYPE_CHECKING:
-    from pilegroup.solver.biot import BiotProblem
+    from pilegroup.solver.problem import BiotProblem
 
 
 def facet_area(md: MeshData, names: Sequence[str], interior: bool = False) -> float:
@@ -30,7 +30,7 @@ class SettlementProbe:
     """Mean vertical displacement (m, down positive) over exterior facet groups.
 
     Args:
-        problem: a :class:`~pilegroup.solver.biot.BiotProblem`; the groups' displacement is
+        problem: a :class:`~pilegroup.solver.problem.BiotProblem`; the groups' displacement is
             that of the body that carries them (:meth:`BiotProblem.body_of_facet`).
         names: exterior facet groups (e.g. the cap top or the pile heads).
     """

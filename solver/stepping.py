@@ -4,7 +4,7 @@ The stepper grows the step after easy Newton convergence, cuts it back and retri
 quadrature state and fields rolled back) after a failure or NaN, never accepts a non-converged
 step, and lands exactly on milestone times (stage ends, output times).
 
-Stages (design.md §4):
+Stages (docs/model.md):
 
 * ``geostatic``: the law states get the K0 effective stress (``SoilMaterial.k0``), the water is
   hydrostatic (excess pressure 0); one step under the buoyant weight checks the equilibrium
@@ -23,10 +23,14 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING
 
 from pilegroup.solver.errors import SolverError, StepFailure
+from pilegroup.solver.exports import Export
 from pilegroup.solver.inputs import Stage, TimeStepping
+
+if TYPE_CHECKING:
+    from pilegroup.solver.problem import BiotProblem
 
 
 @dataclass
@@ -57,7 +61,7 @@ class RunLog:
         return sum(s.newton_its for s in self.steps)
 
 
-Callback = Callable[[Any, float, str], None]
+Callback = Callable[["BiotProblem", float, str], None]
 
 
 class AdaptiveStepper:
@@ -76,7 +80,7 @@ class AdaptiveStepper:
 
     def advance(
         self,
-        problem: Any,
+        problem: BiotProblem,
         t0: float,
         t1: float,
         load_factor: Callable[[float], float],
@@ -146,23 +150,42 @@ def first_dt(stages: Sequence[Stage], ts: TimeStepping) -> float:
 
 
 def run_stages(
-    problem: Any,
+    problem: BiotProblem,
     stages: Sequence[Stage],
     ts: TimeStepping,
     on_milestone: Callback | None = None,
     geostatic_tol: float = 1e-6,
     on_step: Callback | None = None,
+    exports: Sequence[Export] = (),
 ) -> RunLog:
     """Run the stages in order; returns the :class:`RunLog`.
 
     Args:
-        problem: a :class:`~pilegroup.solver.biot.BiotProblem`.
+        problem: a :class:`~pilegroup.solver.problem.BiotProblem`.
         stages: the stages.
         ts: time-stepping rules (milestones in absolute time, day).
-        on_milestone: called at stage ends and milestone times (e.g. an output writer).
+        on_milestone: called at stage ends and milestone times, after the exports.
         geostatic_tol: largest displacement (m) accepted by the geostatic equilibrium check.
         on_step: called after every accepted time step (collective; e.g. a progress bar).
+        exports: written at stage ends and milestone times; closed at the end of the run.
     """
+
+    def milestone(pb: BiotProblem, t: float, stage: str) -> None:
+        for e in exports:
+            e.write(t, stage)
+        if on_milestone is not None:
+            on_milestone(pb, t, stage)
+
+    try:
+        return _run(problem, stages, ts, milestone, geostatic_tol, on_step)
+    finally:
+        for e in exports:
+            e.close()
+
+
+def _run(problem: BiotProblem, stages: Sequence[Stage], ts: TimeStepping,
+         on_milestone: Callback, geostatic_tol: float, on_step: Callback | None) -> RunLog:
+    """The stage loop of :func:`run_stages`."""
     log = RunLog()
     stepper = AdaptiveStepper(ts, log)
     t = 0.0
@@ -185,8 +208,7 @@ def run_stages(
             problem.reset_displacements()
             log.steps.append(StepRecord(st.name, t, 0.0, lam, info.newton_its, info.ksp_its,
                                         info.seconds))
-            if on_milestone is not None:
-                on_milestone(problem, t, st.name)
+            on_milestone(problem, t, st.name)
             continue
         lam0, lam1, t0, t1 = lam, st.load_factor if st.kind == "load" else lam, t, t + st.duration
         if st.kind == "load" and st.duration == 0.0:
@@ -198,8 +220,7 @@ def run_stages(
             log.steps.append(StepRecord(st.name, t, 0.0, lam1, info.newton_its, info.ksp_its,
                                         info.seconds))
             lam = lam1
-            if on_milestone is not None:
-                on_milestone(problem, t, st.name)
+            on_milestone(problem, t, st.name)
             continue
         if st.dt0 is not None:
             stepper.dt = st.dt0

@@ -27,11 +27,17 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import Any
 
 import numpy as np
+import ufl
+from dolfinx import fem
+from dolfinx import mesh as dmesh
+from mpi4py import MPI
 
 from pilegroup.fileio import write_text_atomic
+from pilegroup.geometry import groups
+from pilegroup.model import Scenario
+from pilegroup.solver import BiotProblem
 
 PROFILE_COLUMNS = ("t_day,pile,depth_m,layer,axial_force_kN,shaft_friction_kPa,"
                    "relative_displacement_m")
@@ -40,25 +46,23 @@ LAYER_COLUMNS = ("t_day,pile,layer,layer_name,depth_top_m,depth_bottom_m,shaft_f
 LOAD_COLUMNS = "t_day,pile,x_m,y_m,head_force_kN"
 
 
-def _sum(comm: Any, a: np.ndarray) -> np.ndarray:
-    from mpi4py import MPI
-
+def _sum(comm: MPI.Comm, a: np.ndarray) -> np.ndarray:
     return comm.allreduce(a, op=MPI.SUM)
 
 
 class PileProbe:
     """Collects pile profiles, per-layer histories and pile head loads during a run.
 
+    An export (:class:`~pilegroup.solver.exports.Export`): :meth:`write` at every output time;
+    :meth:`record_step` after every accepted step adds the centre pile's layer means.
+
     Args:
         sc: the scenario (pile positions, diameter, layers).
-        pb: the :class:`~pilegroup.solver.biot.BiotProblem`.
+        pb: the :class:`~pilegroup.solver.problem.BiotProblem`.
         out: output folder for the CSV files.
     """
 
-    def __init__(self, sc: Any, pb: Any, out: Path) -> None:
-        from dolfinx import fem
-        from dolfinx import mesh as dmesh
-
+    def __init__(self, sc: Scenario, pb: BiotProblem, out: Path) -> None:
         self.sc, self.pb, self.out = sc, pb, Path(out)
         self.comm = pb.comm
         self.xy = np.array(sc.piles.xy, dtype=float)
@@ -68,20 +72,18 @@ class PileProbe:
         tops = np.concatenate([[0.0], -np.cumsum([lay.thickness_m or np.inf
                                                   for lay in sc.layers])])
         self._layer_tops = tops
-        body = pb.bodies[-1]  # the structure (or the whole mesh when tied)
+        body = pb.body("structure")  # the whole mesh when tied
         self.body = body
         tdim = body.mesh.topology.dim
         D0 = fem.functionspace(body.mesh, ("DG", 0))
-        import ufl
-
         vol = fem.assemble_vector(fem.form(ufl.TestFunction(D0) * ufl.dx))
         self._vol = vol.array
         # element layers of each pile: (pile, z_mid) bins, global
         self._pile_cells: dict[int, tuple[np.ndarray, np.ndarray]] = {}
         for g in body.qp.groups:
-            if not g.name.startswith("pile_"):
+            i = groups.pile_of(g.name)
+            if i is None:
                 continue
-            i = int(g.name.removeprefix("pile_"))
             zc = dmesh.compute_midpoints(body.mesh, tdim, g.cells)[:, 2] if g.cells.size \
                 else np.zeros(0)
             self._pile_cells[i] = (g.cells, np.round(zc, 6))
@@ -92,7 +94,7 @@ class PileProbe:
             self._levels[i] = allz[allz < 0.0][::-1]  # below ground, top down
         self._itf = pb.interface
         if self._itf is not None:
-            V = pb.bodies[0].V
+            V = pb.body("soil").V
             nloc = V.dofmap.index_map.size_local
             x = V.tabulate_dof_coordinates()
             owned = np.arange(x.shape[0]) < nloc
@@ -118,7 +120,7 @@ class PileProbe:
         cells, zc = self._pile_cells.get(i, (np.zeros(0, np.int32), np.zeros(0)))
         if averages is None:
             averages = self.body.qp.cell_average("stress")
-        avg = averages.get(f"pile_{i}")
+        avg = averages.get(groups.pile(i))
         loc = np.zeros(levels.size)
         if avg is not None and cells.size:
             below = zc < 0.0  # the embedded part inside the cap is not a pile section
@@ -212,6 +214,14 @@ class PileProbe:
             for i in range(1, len(self.xy) + 1):
                 self.pile_layer_rows += self._layer_rows(t, i, means[i])
         self._write()
+
+    def write(self, t: float, stage: str) -> None:
+        """Export protocol: the step's layer means and every pile's tables at ``t``."""
+        self.record_step(t)
+        self.record_output(t)
+
+    def close(self) -> None:
+        """Nothing stays open (every table is rewritten atomically at each write)."""
 
     def record_step(self, t: float) -> None:
         """Layer means of the centre pile after an accepted step (collective)."""

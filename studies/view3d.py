@@ -1,6 +1,6 @@
 """One 3D view of a run's results at its last output time: ``plots/view3d.png``.
 
-Input is the run's own XDMF/HDF5 output (:class:`~pilegroup.solver.output.XDMFSeries`), read
+Input is the run's own XDMF/HDF5 output (:class:`~pilegroup.solver.exports.XDMFSeries`), read
 with ``xml.etree`` and h5py (pyvista's XDMF reader crashes on DOLFINx's XDMF 3 files):
 
 * separate pile and soil fields (``elastic`` / ``viscoplastic`` interface): ``results.xdmf``

@@ -158,7 +158,7 @@ def test_geostatic_stage_equilibrium_and_reset():
     log = run_stages(pb, [Stage("geo", "geostatic")], TimeStepping())
     assert log.geostatic_max_u < 1e-9
     assert pb.max_displacement() == 0.0
-    for g in pb.qp.groups:
+    for g in pb.bodies[0].qp.groups:
         z = g.x[:, 2]
         g1, g2 = 18.0 - GAMMA_W, 20.0 - GAMMA_W
         sv = np.where(z > -4, g1 * z, -4 * g1 + g2 * (z + 4))
@@ -168,7 +168,7 @@ def test_geostatic_stage_equilibrium_and_reset():
         assert np.allclose(s[:, 0], k0 * sv, rtol=1e-8, atol=1e-8)
     # a wrong initial stress is detected by the equilibrium check
     pb2 = BiotProblem(md, mats, displacement_bcs=bcs)
-    pb2.geostatic_stress = lambda: {g.name: None for g in pb2.qp.groups}
+    pb2.geostatic_stress = lambda: {g.name: None for g in pb2.bodies[0].qp.groups}
     with pytest.raises(SolverError):
         run_stages(pb2, [Stage("geo", "geostatic")], TimeStepping(), geostatic_tol=1e-6)
 

@@ -15,7 +15,8 @@ from dolfinx import fem, la, mesh
 from mpi4py import MPI
 
 from pilegroup.geometry.meshdata import MeshData
-from pilegroup.solver.interface import NodalInterface, split_bodies
+from pilegroup.solver.interface import NodalInterface
+from pilegroup.solver.layout import split_bodies
 
 KN, KT = 5.0e4, 2.0e3  # kPa/m
 

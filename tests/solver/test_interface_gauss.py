@@ -26,7 +26,9 @@ from pilegroup.solver import (
     SoilMaterial,
     SolverInputError,
 )
-from pilegroup.solver.interface import GaussInterface, NodalInterface, split_bodies
+from pilegroup.solver.interface import NodalInterface
+from pilegroup.solver.interface_gauss import GaussInterface
+from pilegroup.solver.layout import split_bodies
 
 KN, KT = 5.0e4, 2.0e3  # kPa/m
 
@@ -165,30 +167,28 @@ def test_gauss_jacobian_matches_finite_differences():
 
     pb = _problem()
     assert isinstance(pb.interface, GaussInterface)
-    pb._set_step_constants(1.0, 1.0)
     rng = np.random.default_rng(7 + MPI.COMM_WORLD.rank)
     for b in pb.bodies:  # a jump of a few mm: the cubic term changes the tangent by O(1)
         b.u.interpolate(lambda x: np.vstack([2e-3 * np.sin(3 * x[1] + x[2]),
                                              1e-3 * np.cos(2 * x[2] + x[0]),
                                              3e-3 * x[1] * x[2]]) * (1.0 + (x[0] > 1.0)))
-    pb._apply_bc_values()
+    pb.set_step(1.0, 1.0)  # prescribed values into the fields, fields -> pb.x
     x = pb.x  # the problem's own block vector (keeps its block layout)
-    pb._fields_to_x(x)
     x0 = x.array.copy()
 
     def residual(xa):
         x.array[:] = xa
-        pb._x_to_fields(x)
-        pb._evaluate_law()
-        pb._assemble_residual()
+        pb.layout.x_to_fields(x)
+        pb.evaluate_laws()
+        pb.assemble_residual()
         return pb.b.array.copy()
 
     residual(x0)
-    pb._assemble_matrix()
-    v = pb.dx_vec
+    pb.assemble_jacobian(force=True)
+    v = pb.dx
     v.array[:] = rng.standard_normal(v.array.size)
-    fpetsc.set_bc(v, fem.bcs_by_block(pb._spaces, pb._bcs_zero))  # no motion of bc dofs
-    Jv = pb._tmp
+    fpetsc.set_bc(v, fem.bcs_by_block(pb.spaces, pb.constraints.bcs_zero))  # bc dofs fixed
+    Jv = pb.tmp
     pb.A.mult(v, Jv)
     jv, va = Jv.array.copy(), v.array.copy()
     h = 1e-7
@@ -202,10 +202,9 @@ def test_gauss_jacobian_matches_finite_differences():
     print(f"FD check: relative error {err:.3e}")
     assert err < 1e-6, err
     # the interface matrix is what makes it exact: without it the error is O(1)
-    pb._matrix_key = None
     pb.interface.has_matrix = False
     residual(x0)
-    pb._assemble_matrix()
+    pb.assemble_jacobian(force=True)
     pb.A.mult(v, Jv)
     without = norm(fd - Jv.array) / norm(jv)
     print(f"FD check without the interface matrix: {without:.3e}")

@@ -11,14 +11,15 @@ import pytest
 
 SCRIPT = r'''
 import sys
+from pathlib import Path
 import numpy as np
 import pilegroup
 from mpi4py import MPI
 from pilegroup.constitutive.soil import MohrCoulomb
 from pilegroup.geometry.box import build_box
 from pilegroup.solver import (BiotProblem, DisplacementBC, PressureBC, SoilMaterial, Stage,
-                              SurfaceLoad, TimeStepping)
-from pilegroup.solver.output import run_and_write
+                              SummaryWriter, SurfaceLoad, TimeStepping, XDMFSeries, run_stages,
+                              run_summary)
 
 md = build_box(MPI.COMM_WORLD, (0, 1), (0, 1), np.linspace(-2, 0, 5), 2, 2, layer_tops=[-1.0])
 law = MohrCoulomb(E=1e4, nu=0.3, c=5.0, phi_deg=25.0)
@@ -29,7 +30,12 @@ pb = BiotProblem(md, mats, displacement_bcs=bcs, pressure_bcs=[PressureBC("groun
                  loads=[SurfaceLoad("ground_surface", 80.0)])
 stages = [Stage("geo", "geostatic"), Stage("load", "load", 1.0, 1.0, dt0=0.25),
           Stage("cons", "consolidation", 10.0)]
-run_and_write(pb, stages, TimeStepping(dt0=0.5, milestones=(5.0,)), sys.argv[1])
+out = Path(sys.argv[1])
+series = XDMFSeries(pb, out / "results.xdmf")
+writer = SummaryWriter(out / "summary.json", pb.comm,
+                       lambda done: {"complete": done, "output_times_day": series.times})
+log = run_stages(pb, stages, TimeStepping(dt0=0.5, milestones=(5.0,)), exports=[series, writer])
+writer.finish(run_summary(pb, log, {"complete": True, "output_times_day": series.times}))
 '''
 
 

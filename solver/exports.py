@@ -1,4 +1,10 @@
-"""Result writers: XDMF time series for ParaView and ``summary.json``.
+"""Exports of a run: objects written at every output time by the stage runner.
+
+Protocol (:class:`Export`): built on a problem (set up), ``write(t, stage)`` at each output
+time (stage ends and ``TimeStepping.milestones``; collective), ``close()`` at the end.
+:class:`XDMFSeries` (fields for ParaView), :class:`SettlementSeries` (``settlement.csv``) and
+:class:`SummaryWriter` (a JSON summary rewritten at every output time) live here; the studies
+add their own (pile probes).
 
 Everything written states its sign convention: stresses and strains are written **tension
 positive** (as used inside the code); the excess pore pressure is compression positive. Units
@@ -13,23 +19,43 @@ scalars are all-reduced over ``mesh.comm`` first.
 from __future__ import annotations
 
 import time
+from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any, Protocol
 
+import basix.ufl
 import numpy as np
+from dolfinx import fem, io
+from dolfinx import mesh as dmesh
+from mpi4py import MPI
 
 from pilegroup.constitutive.base import mandel_to_tensor
-from pilegroup.fileio import write_json_atomic
+from pilegroup.fileio import write_json_atomic, write_text_atomic
+from pilegroup.geometry import groups
+from pilegroup.solver.probes import SettlementProbe
+from pilegroup.solver.qpstate import QuadratureState
+
+if TYPE_CHECKING:
+    from pilegroup.solver.problem import BiotProblem
+    from pilegroup.solver.stepping import RunLog
+
+
+class Export(Protocol):
+    """What the stage runner calls at every output time and at the end of a run."""
+
+    def write(self, t: float, stage: str) -> None:
+        """Write the state at output time ``t`` (day) of stage ``stage`` (collective)."""
+
+    def close(self) -> None:
+        """Finish (files stay complete after every :meth:`write` anyway)."""
 
 
 class _MeshSeries:
     """One XDMF file on one mesh: displacement, optional pressure, cell fields of a qp state."""
 
-    def __init__(self, comm: Any, path: Path, mesh: Any, u: Any = None, qp: Any = None,
-                 p: Any = None) -> None:
-        import basix.ufl
-        from dolfinx import fem, io
-
+    def __init__(self, comm: MPI.Comm, path: Path, mesh: dmesh.Mesh,
+                 u: fem.Function | None = None, qp: QuadratureState | None = None,
+                 p: fem.Function | None = None) -> None:
         self.comm, self.path, self.u, self.qp, self.p = comm, path, u, qp, p
         cell = mesh.basix_cell()
         self.u1 = None
@@ -52,8 +78,6 @@ class _MeshSeries:
             f.write_mesh(mesh)
 
     def write(self, t: float) -> None:
-        from dolfinx import io
-
         if self.u1 is not None:
             self.u1.interpolate(self.u)
         for key, f in self.cell_fields.items():
@@ -75,7 +99,7 @@ class _MeshSeries:
 
 
 class XDMFSeries:
-    """XDMF time series of a :class:`~pilegroup.solver.biot.BiotProblem`.
+    """XDMF time series of a :class:`~pilegroup.solver.problem.BiotProblem`.
 
     Files (next to ``path``): ``path`` holds the soil (or, with tied piles, the whole mesh):
     ``displacement`` (m, Q1), ``excess_pore_pressure`` (kPa, compression positive, when it
@@ -86,7 +110,7 @@ class XDMFSeries:
     fields on the pile-surface facets (see :meth:`NodalInterface.nodal_fields`).
     """
 
-    def __init__(self, problem: Any, path: str | Path) -> None:
+    def __init__(self, problem: BiotProblem, path: str | Path) -> None:
         self.problem = problem
         self.path = Path(path)
         self.comm = problem.comm
@@ -94,7 +118,7 @@ class XDMFSeries:
             self.path.parent.mkdir(parents=True, exist_ok=True)
         self.comm.barrier()
         stem = self.path.stem
-        self.series: list[Any] = []
+        self.series: list[_MeshSeries | _InterfaceSeries] = []
         for i, b in enumerate(problem.bodies):
             path_b = self.path if i == 0 else self.path.with_name(f"{stem}_{b.name}.xdmf")
             p = problem.p if problem.p_mesh is b.mesh else None
@@ -107,7 +131,7 @@ class XDMFSeries:
                 f"{stem}_interface.xdmf")))
         self.times: list[float] = []
 
-    def write(self, t: float) -> None:
+    def write(self, t: float, stage: str = "") -> None:
         """Append the current fields at time ``t`` (day); each file is closed after."""
         for s in self.series:
             s.write(t)
@@ -120,16 +144,13 @@ class XDMFSeries:
 class _InterfaceSeries:
     """Interface fields on a facet mesh of the pile surfaces (nodal values, Q1)."""
 
-    def __init__(self, problem: Any, path: Path) -> None:
-        from dolfinx import fem, io
-        from dolfinx import mesh as dmesh
-
+    def __init__(self, problem: BiotProblem, path: Path) -> None:
         itf = problem.interface
-        soil = problem.bodies[0]
-        names = [n for n in problem.md.facet_names if n.startswith(("shaft_", "base_"))]
+        soil = problem.body("soil")
+        md = problem.md
+        names = [n for n in md.facet_names if groups.is_interface(n)]
         facets = np.unique(np.concatenate(
-            [problem.sub_facets(soil, problem.md.facet_tags.find(problem.md.facet_tag(n)))
-             for n in names]))
+            [problem.sub_facets(soil, md.facet_tags.find(md.facet_tag(n))) for n in names]))
         tdim = soil.mesh.topology.dim
         fmesh, _, vmap, _ = dmesh.create_submesh(soil.mesh, tdim - 1, facets)
         self.comm, self.path, self.itf = problem.comm, path, itf
@@ -146,8 +167,6 @@ class _InterfaceSeries:
             f.write_mesh(fmesh)
 
     def write(self, t: float) -> None:
-        from dolfinx import io
-
         vals = self.itf.nodal_fields()
         for key, fn in self.fields.items():
             a = vals[key].reshape(vals[key].shape[0], -1)
@@ -158,7 +177,7 @@ class _InterfaceSeries:
                 f.write_function(fn, t)
 
 
-def _vertex_to_dof(V: Any) -> np.ndarray:
+def _vertex_to_dof(V: fem.FunctionSpace) -> np.ndarray:
     """Node (block dof) of each vertex of a degree-1 Lagrange space (dof i = cell vertex i)."""
     msh = V.mesh
     tdim = msh.topology.dim
@@ -175,23 +194,20 @@ def _vertex_to_dof(V: Any) -> np.ndarray:
     return out
 
 
-def _vertex_to_dof_sub(fmesh: Any) -> np.ndarray:
-    from dolfinx import fem
-
+def _vertex_to_dof_sub(fmesh: dmesh.Mesh) -> np.ndarray:
     return _vertex_to_dof(fem.functionspace(fmesh, ("Lagrange", 1)))
 
 
-def write_summary(path: str | Path, data: dict[str, Any], comm: Any) -> None:
+def write_summary(path: str | Path, data: dict[str, Any], comm: MPI.Comm) -> None:
     """Write ``data`` as JSON on rank 0 (atomic rename); every rank returns after it."""
     if comm.rank == 0:
         write_json_atomic(path, data)
     comm.barrier()
 
 
-def run_summary(problem: Any, log: Any, extra: dict[str, Any] | None = None) -> dict[str, Any]:
+def run_summary(problem: BiotProblem, log: RunLog, extra: dict[str, Any] | None = None
+                ) -> dict[str, Any]:
     """All-reduced scalars of a run: sizes, steps, Newton/KSP counts, timings, extremes."""
-    from mpi4py import MPI
-
     comm = problem.comm
     timings = {k: comm.allreduce(v, op=MPI.MAX) for k, v in problem.timings.items()}
     nloc = problem.Q.dofmap.index_map.size_local
@@ -226,29 +242,51 @@ def run_summary(problem: Any, log: Any, extra: dict[str, Any] | None = None) -> 
     return out
 
 
-def run_and_write(problem: Any, stages: Any, ts: Any, out_dir: str | Path,
-                  extra: dict[str, Any] | None = None, geostatic_tol: float = 1e-6) -> Any:
-    """Run the stages, writing ``results.xdmf`` at every milestone and ``summary.json`` after.
+class SettlementSeries:
+    """``settlement.csv``: mean settlement (m, down positive) of facet groups at output times.
 
-    Milestones are the stage ends and ``ts.milestones``. The summary is also rewritten at each
-    milestone (``"complete": false`` until the end), so an interrupted run leaves a readable
-    summary of what was done. Returns the :class:`~pilegroup.solver.stepping.RunLog`.
+    Columns ``t_day,stage,settlement_m``; rewritten atomically by rank 0 at every write.
     """
-    from pilegroup.solver.stepping import run_stages
 
-    out = Path(out_dir)
-    series = XDMFSeries(problem, out / "results.xdmf")
+    COLUMNS = "t_day,stage,settlement_m"
 
-    def on_milestone(pb: Any, t: float, stage: str) -> None:
-        series.write(t)
-        data = {"complete": False, "last_output_time_day": t, "last_stage": stage,
-                "output_times_day": series.times}
-        write_summary(out / "summary.json", data, problem.comm)
+    def __init__(self, problem: BiotProblem, names: Sequence[str], path: str | Path) -> None:
+        self.probe = SettlementProbe(problem, names)
+        self.path = Path(path)
+        self.comm = problem.comm
+        self.history: list[tuple[float, str, float]] = []
 
-    log = run_stages(problem, stages, ts, on_milestone=on_milestone, geostatic_tol=geostatic_tol)
-    series.close()
-    data = run_summary(problem, log, extra)
-    data.update({"complete": True, "output_times_day": series.times,
-                 "xdmf": str((out / "results.xdmf").name)})
-    write_summary(out / "summary.json", data, problem.comm)
-    return log
+    def write(self, t: float, stage: str) -> None:
+        """Record the settlement at ``t`` and rewrite the file."""
+        self.history.append((t, stage, self.probe()))
+        if self.comm.rank == 0:
+            lines = [self.COLUMNS] + [f"{a:.6g},{b},{c:.9g}" for a, b, c in self.history]
+            write_text_atomic(self.path, "\n".join(lines) + "\n")
+
+    def close(self) -> None:
+        """Nothing stays open."""
+
+
+class SummaryWriter:
+    """A JSON summary rewritten (rank 0, atomically) at every output time.
+
+    ``content(complete)`` gives the data; it is written with ``complete = False`` at every
+    output time, so an interrupted run leaves a readable summary of what was done; the final
+    summary is written by :meth:`finish`.
+    """
+
+    def __init__(self, path: str | Path, comm: MPI.Comm,
+                 content: Callable[[bool], dict[str, Any]]) -> None:
+        self.path, self.comm, self.content = Path(path), comm, content
+
+    def write(self, t: float, stage: str) -> None:
+        """Rewrite the summary (``complete: false``)."""
+        if self.comm.rank == 0:
+            write_json_atomic(self.path, self.content(False))
+
+    def close(self) -> None:
+        """Nothing stays open."""
+
+    def finish(self, data: dict[str, Any]) -> None:
+        """Write the final summary ``data`` (collective)."""
+        write_summary(self.path, data, self.comm)

@@ -1,0 +1,169 @@
+"""Boundary conditions of the coupled problem and the force-controlled rigid plate.
+
+Prescribed displacements (ramped with the load factor when asked), drained boundaries (excess
+pore pressure prescribed; released in undrained steps unless ``in_undrained_steps``) and at most
+one rigid plate whose resultant is held at a given force by bordering the Newton system.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
+
+import numpy as np
+from dolfinx import default_scalar_type, fem
+from dolfinx.fem import petsc as fpetsc
+from mpi4py import MPI
+from petsc4py import PETSc
+
+from pilegroup.solver.errors import SolverInputError
+from pilegroup.solver.inputs import DisplacementBC, PressureBC, RigidPlate
+from pilegroup.solver.interface import NodalInterface
+from pilegroup.solver.layout import BlockLayout
+
+if TYPE_CHECKING:
+    from pilegroup.solver.problem import BiotProblem
+
+
+class Constraints:
+    """Dirichlet conditions with their values, homogeneous copies and drainage flags.
+
+    ``bcs`` carry the prescribed values (matrix assembly, values put into the fields);
+    ``bcs_zero`` are the same dofs with zero values (residual and Newton increments).
+    """
+
+    def __init__(self, layout: BlockLayout, displacement_bcs: Sequence[DisplacementBC],
+                 pressure_bcs: Sequence[PressureBC], plates: Sequence[RigidPlate],
+                 interface: NodalInterface | None) -> None:
+        if len(plates) > 1:
+            raise SolverInputError(f"plates: {len(plates)} given; allowed: at most 1")
+        self.bcs: list[fem.DirichletBC] = []
+        self.bcs_zero: list[fem.DirichletBC] = []
+        self._drain: set[int] = set()
+        self._targets: list[tuple[fem.DirichletBC, fem.Function]] = []
+        self._u_consts: list[tuple[DisplacementBC, fem.Constant]] = []
+        mesh = layout.mesh
+        for bc in displacement_bcs:
+            if bc.component not in (0, 1, 2):
+                raise SolverInputError(f"DisplacementBC.component = {bc.component}; allowed 0-2")
+            b = layout.body_of_facet(bc.facet)
+            c = fem.Constant(mesh, default_scalar_type(0.0))
+            self._u_consts.append((bc, c))
+            self._add(layout.facet_dofs(b, bc.facet, bc.component), b.V.sub(bc.component), c,
+                      b.u)
+        for pbc in pressure_bcs:
+            bc, bc0 = self._add(layout.pressure_dofs(pbc.facet), layout.Q,
+                                default_scalar_type(pbc.value), layout.p)
+            if pbc.facet is not None and not pbc.in_undrained_steps:
+                self._drain.update({id(bc), id(bc0)})
+        self.plate = RigidPlateControl(self, layout, plates[0], interface) if plates else None
+
+    def _add(self, dofs: np.ndarray, V: fem.FunctionSpace, value: fem.Constant | float,
+             target: fem.Function) -> tuple[fem.DirichletBC, fem.DirichletBC]:
+        """Append a condition with value ``value`` and its homogeneous copy."""
+        bc = fem.dirichletbc(value, dofs, V)
+        bc0 = fem.dirichletbc(default_scalar_type(0.0), dofs, V)
+        self.bcs.append(bc)
+        self.bcs_zero.append(bc0)
+        self._targets.append((bc, target))
+        return bc, bc0
+
+    def set_load(self, load_factor: float) -> None:
+        """Prescribed displacements at ``load_factor`` (ramped ones scale with it)."""
+        for bc, c in self._u_consts:
+            c.value = bc.value * (load_factor if bc.ramp else 1.0)
+
+    def active(self, bcs: list[fem.DirichletBC], undrained: bool) -> list[fem.DirichletBC]:
+        """The conditions in force in the step (drainage released when undrained)."""
+        if not undrained:
+            return bcs
+        return [bc for bc in bcs if id(bc) not in self._drain]
+
+    def apply_values(self, undrained: bool) -> None:
+        """Put the prescribed values into the fields; Newton increments then vanish there."""
+        for bc, f in self._targets:
+            if not (undrained and id(bc) in self._drain):
+                bc.set(f.x.array)
+
+
+class RigidPlateControl:
+    """A rigid plate under force control: the plate's displacement ``U`` is an extra unknown.
+
+    The plate's facet dofs move by ``U`` (a Dirichlet condition); Newton borders its system so
+    that the plate resultant equals ``force * load_factor``: ``dx = dx_a + dU dx_b`` where
+    ``dx_a`` solves with the plate held, ``dx_b`` is the response to a unit plate motion, and
+    ``dU`` comes from a secant on the plate resultant (exact for linear problems).
+    """
+
+    def __init__(self, cons: Constraints, layout: BlockLayout, spec: RigidPlate,
+                 interface: NodalInterface | None) -> None:
+        self.spec = spec
+        b = layout.body_of_facet(spec.facet)
+        self.body = layout.bodies.index(b)
+        dofs = layout.facet_dofs(b, spec.facet, spec.component)
+        Vc = b.V.sub(spec.component)
+        self.U = fem.Constant(layout.mesh, default_scalar_type(0.0))
+        cons._add(dofs, Vc, self.U, b.u)
+        self.unit_bcs = cons.bcs_zero[:-1] + [fem.dirichletbc(
+            fem.Constant(layout.mesh, default_scalar_type(-1.0)), dofs, Vc)]
+        self.owned = dofs[dofs < b.V.dofmap.index_map.size_local * 3]
+        self.db: PETSc.Vec | None = None
+        self.value = 0.0
+        self.committed = 0.0
+        if interface is not None and interface.has_matrix:
+            # the bordering lifts the plate motion through the forms only
+            hit = np.isin(dofs, interface.touched_dofs(b.name)).any()
+            if layout.comm.allreduce(bool(hit), op=MPI.LOR):
+                raise SolverInputError(
+                    f"RigidPlate on {spec.facet!r} moves interface nodes; allowed with "
+                    "InterfaceCoupling.quadrature = 'nodal' only")
+
+    def target(self, load_factor: float) -> float:
+        """Plate force (kN) at ``load_factor``."""
+        return self.spec.force * load_factor
+
+    def set(self, value: float) -> None:
+        """Move the plate to ``value`` (m)."""
+        self.value = value
+        self.U.value = value
+
+    def gap(self, problem: BiotProblem, load_factor: float) -> float:
+        """Plate resultant minus its target force (kN) at the current state."""
+        return problem.block_resultant(self.owned, self.body) - self.target(load_factor)
+
+    def unit_response(self, problem: BiotProblem) -> PETSc.Vec:
+        """``dx_b``: the Newton response to a unit plate motion (cached until J changes)."""
+        if self.db is None:
+            rhs = problem.tmp
+            with rhs.localForm() as rl:
+                rl.set(0.0)
+            unit_bcs = problem.active(self.unit_bcs)
+            fpetsc.apply_lifting(rhs, problem.J_forms, bcs=fem.bcs_by_block(
+                fem.extract_function_spaces(problem.J_forms, 1), unit_bcs), alpha=1.0)
+            rhs.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+            fpetsc.set_bc(rhs, fem.bcs_by_block(problem.spaces, unit_bcs))
+            db = problem.dx.duplicate()
+            db.setAttr("_blocks", problem.dx.getAttr("_blocks"))
+            problem.solve_linear(rhs, db)
+            self.db = db
+        return self.db
+
+    def border(self, problem: BiotProblem, load_factor: float) -> float:
+        """Correct the Newton increment ``problem.dx`` for the plate force; returns ``dU``."""
+        db = self.unit_response(problem)
+        x0 = problem.x.copy()
+        xa = problem.x.copy()
+        xa.axpy(-1.0, problem.dx)
+        problem.layout.x_to_fields(xa)
+        problem.evaluate_laws()
+        Ra = problem.block_resultant(self.owned, self.body)
+        xb = xa.copy()
+        xb.axpy(-1.0, db)
+        problem.layout.x_to_fields(xb)
+        problem.evaluate_laws()
+        Rb = problem.block_resultant(self.owned, self.body)
+        dU = -(Ra - self.target(load_factor)) / (Rb - Ra)
+        problem.dx.axpy(dU, db)
+        self.set(self.value + dU)
+        problem.layout.x_to_fields(x0)
+        return dU

@@ -1,0 +1,201 @@
+"""The weak form of the coupled problem, one builder per physical term.
+
+Residual ``F[i]`` and Jacobian ``J[i][j]`` blocks follow the block order of
+:class:`~pilegroup.solver.layout.BlockLayout` (``[u, p, u_structure]``). Physics (docs/model.md;
+units kN, m, day; tension positive; ``p`` excess pore pressure, compression positive):
+
+* momentum: ``int sigma' : eps(v) - p div v + b' . v``, ``b' = (gamma_sat - GAMMA_W) e_z`` the
+  buoyant weight (with ``self_weight``); the stress and its consistent tangent come from the
+  quadrature-point state;
+* mass balance, backward Euler (multiplied by dt):
+  ``S (p - p_n) + div(u - u_n) - dt div((k/GAMMA_W) grad p) = 0``, ``S = n / K_w``;
+* pressure stabilisation of Q1-Q1 (Bochev, Dohrmann & Gunzburger 2006; White & Borja 2008):
+  ``tau int (dp - Pi0 dp)(q - Pi0 q)`` as the full-quadrature minus the one-point mass matrix;
+* surface loads: ``int c n . v`` with a Constant pressure per load;
+* interface: the law's effective traction plus the excess pore pressure on the pile surfaces;
+* fixed-stress preconditioning term ``(1/K_dr) M`` on the pressure block.
+
+Every cell term uses the Gauss rule of degree ``2 * u_degree`` (exact on affine cells for the
+products of Q2-Q1 and Q1-Q1); UFL's estimate for hexahedra would use up to 8x more points.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import ufl
+from dolfinx import default_scalar_type, fem
+from dolfinx import mesh as dmesh
+
+from pilegroup.solver.geostatic import SoilColumn
+from pilegroup.solver.inputs import GAMMA_W, Discretisation, SoilMaterial, SurfaceLoad
+from pilegroup.solver.interface import NodalInterface
+from pilegroup.solver.layout import BlockLayout, Body, eps_mandel
+
+Form = ufl.Form | None
+
+
+@dataclass
+class BlockForms:
+    """Residual blocks ``F[i]`` and Jacobian blocks ``J[i][j]`` (UFL forms, summed by term)."""
+
+    n: int
+    F: list[Form] = field(init=False)
+    J: list[list[Form]] = field(init=False)
+
+    def __post_init__(self) -> None:
+        self.F = [None] * self.n
+        self.J = [[None] * self.n for _ in range(self.n)]
+
+    def add_F(self, i: int, form: ufl.Form) -> None:
+        """Add ``form`` to residual block ``i``."""
+        self.F[i] = form if self.F[i] is None else self.F[i] + form
+
+    def add_J(self, i: int, j: int, form: ufl.Form) -> None:
+        """Add ``form`` to Jacobian block ``(i, j)``."""
+        self.J[i][j] = form if self.J[i][j] is None else self.J[i][j] + form
+
+
+class Coefficients:
+    """Cell-wise (DG0, parent mesh) material coefficients of the soil terms.
+
+    ``S`` storage (1/kPa), ``mob`` mobility k/GAMMA_W (m^2/(kPa day)), ``gam`` buoyant unit
+    weight (kN/m^3; solids take that of the layer they replace), ``tau`` stabilisation
+    ``stab_factor / (2 G)`` (1/kPa), ``beta`` fixed-stress ``1/K`` (1/kPa).
+    """
+
+    def __init__(self, layout: BlockLayout, disc: Discretisation, column: SoilColumn) -> None:
+        mesh, md = layout.mesh, layout.md
+        D0 = fem.functionspace(mesh, ("DG", 0))
+        self.S, self.mob, self.gam, self.tau, self.beta = (fem.Function(D0) for _ in range(5))
+        for name, mat in layout.materials.items():
+            cells = md.cell_tags.find(md.cell_tag(name))
+            if not isinstance(mat, SoilMaterial):
+                zc = dmesh.compute_midpoints(mesh, mesh.topology.dim, cells)[:, 2]
+                self.gam.x.array[cells] = column.buoyant_weight(zc)
+                continue
+            K, G = mat.elastic_moduli()
+            self.S.x.array[cells] = mat.storage
+            self.mob.x.array[cells] = mat.mobility
+            self.gam.x.array[cells] = mat.gamma_sat - GAMMA_W
+            self.tau.x.array[cells] = disc.stab_factor / (2.0 * G)
+            self.beta.x.array[cells] = 1.0 / K
+        self.dt = fem.Constant(mesh, default_scalar_type(0.0))
+
+
+class FormBuilder:
+    """Test and trial functions, measures and coefficients shared by the term builders."""
+
+    def __init__(self, layout: BlockLayout, disc: Discretisation, coef: Coefficients) -> None:
+        self.layout, self.disc, self.coef = layout, disc, coef
+        md, mesh = layout.md, layout.mesh
+        q_md = {"quadrature_degree": disc.quadrature_degree}
+        self.dx_all = ufl.Measure("dx", domain=mesh, subdomain_data=md.cell_tags, metadata=q_md)
+        self.dx = self.dx_all(layout.soil_tags) if layout.has_solids else \
+            ufl.Measure("dx", domain=mesh, metadata=q_md)
+        self.ds = ufl.Measure("ds", domain=mesh, subdomain_data=md.facet_tags)
+        self.tests = [ufl.TestFunction(b.V) for b in layout.bodies]
+        self.trials = [ufl.TrialFunction(b.V) for b in layout.bodies]
+        self.q, self.dp = ufl.TestFunction(layout.Q), ufl.TrialFunction(layout.Q)
+        self.forms = BlockForms(len(layout.fields))
+
+    def dx_body(self, b: Body) -> ufl.Measure:
+        """Cell measure over a body's cells."""
+        return self.dx_all(b.tags) if self.layout.has_solids else self.dx
+
+    def internal_force(self, b: Body) -> ufl.Form:
+        """``int sigma' : eps(v)`` of body ``b`` (its internal force)."""
+        v = self.tests[self.layout.bodies.index(b)]
+        return ufl.inner(b.qp.stress, eps_mandel(v)) * self.dx_body(b)
+
+    def momentum(self, self_weight: bool) -> None:
+        """Effective stress, buoyant weight and the pore-pressure coupling ``-p div v``."""
+        lay, f = self.layout, self.forms
+        for b, v, du in zip(lay.bodies, self.tests, self.trials, strict=True):
+            i = lay.block_of(b)
+            f.add_F(i, self.internal_force(b))
+            if self_weight:
+                f.add_F(i, self.coef.gam * v[2] * self.dx_body(b))
+            f.add_J(i, i, ufl.inner(ufl.dot(b.qp.tangent, eps_mandel(du)), eps_mandel(v))
+                    * self.dx_body(b))
+        v0, du0 = self.tests[0], self.trials[0]
+        f.add_F(0, -lay.p * ufl.div(v0) * self.dx)
+        f.add_J(0, 1, -self.dp * ufl.div(v0) * self.dx)
+        f.add_J(1, 0, ufl.div(du0) * self.q * self.dx)
+
+    def surface_loads(self, loads: Sequence[SurfaceLoad]) -> list[tuple[SurfaceLoad, fem.Constant]]:
+        """``int c n . v`` on each load's facets; returns the loads with their pressure."""
+        lay, md = self.layout, self.layout.md
+        nrm = ufl.FacetNormal(lay.mesh)
+        out = []
+        for ld in loads:
+            c = fem.Constant(lay.mesh, default_scalar_type(0.0))
+            b = lay.body_of_facet(ld.facet)
+            v = self.tests[lay.bodies.index(b)]
+            ds = self.ds(md.facet_tag(ld.facet))
+            self.forms.add_F(lay.block_of(b), c * ufl.inner(nrm, v) * ds)
+            out.append((ld, c))
+        return out
+
+    def mass_balance(self) -> None:
+        """Storage, volume change and Darcy flow (backward Euler, times dt)."""
+        lay, c, q, dp = self.layout, self.coef, self.q, self.dp
+        p, p_n, u, u_n = lay.p, lay.p_n, lay.fields[0], lay.fields_n[0]
+        dx = self.dx
+        self.forms.add_F(1, (c.S * (p - p_n) + ufl.div(u - u_n)) * q * dx
+                         + c.dt * c.mob * ufl.inner(ufl.grad(p), ufl.grad(q)) * dx)
+        self.forms.add_J(1, 1, c.S * dp * q * dx
+                         + c.dt * c.mob * ufl.inner(ufl.grad(dp), ufl.grad(q)) * dx)
+
+    def stabilisation(self) -> None:
+        """Polynomial pressure projection of the equal-order pair (full minus one-point mass)."""
+        lay, tau, q, dp = self.layout, self.coef.tau, self.q, self.dp
+        sd = dict(subdomain_data=lay.md.cell_tags, subdomain_id=lay.soil_tags) \
+            if lay.has_solids else {}
+        dx_full = ufl.Measure("dx", domain=lay.mesh, metadata={"quadrature_degree": 2}, **sd)
+        dx_one = ufl.Measure("dx", domain=lay.mesh, metadata={"quadrature_degree": 1}, **sd)
+        dpn = lay.p - lay.p_n
+        self.forms.add_F(1, tau * dpn * q * dx_full - tau * dpn * q * dx_one)
+        self.forms.add_J(1, 1, tau * dp * q * dx_full - tau * dp * q * dx_one)
+
+    def interface(self, itf: NodalInterface) -> None:
+        """Interface traction (law + excess pore pressure) between structure and soil.
+
+        The law gives the effective traction ``t'``; the total traction on the pile is
+        ``t' - p n`` (``n`` the structure's outward normal, ``p`` the excess pore pressure on
+        the soil side), so the residuals get ``-int (t' - p n) . v_str`` and
+        ``+int (t' - p n) . v_soil`` over the pile surfaces.
+        """
+        lay, f = self.layout, self.forms
+        soil, struct = lay.body("soil"), lay.body("structure")
+        i_s, i_t = lay.block_of(soil), lay.block_of(struct)
+        v_s, v_t = self.tests[0], self.tests[1]
+        du_s, du_t = self.trials[0], self.trials[1]
+        r_t, r_s = itf.residual_forms(v_t, v_s)
+        n = ufl.FacetNormal(lay.mesh)("+")
+        dS = itf.surface_measure()
+        p = lay.p("-")
+        f.add_F(i_t, r_t + p * ufl.inner(n, v_t("+")) * dS)
+        f.add_F(i_s, r_s - p * ufl.inner(n, v_s("-")) * dS)
+        Ji = itf.jacobian_forms(du_t, du_s, v_t, v_s)
+        f.add_J(i_t, i_t, Ji[0][0])
+        f.add_J(i_t, i_s, Ji[0][1])
+        f.add_J(i_s, i_t, Ji[1][0])
+        f.add_J(i_s, i_s, Ji[1][1])
+        f.add_J(i_s, 1, -self.dp("-") * ufl.inner(n, v_s("-")) * dS)
+        f.add_J(i_t, 1, self.dp("-") * ufl.inner(n, v_t("+")) * dS)
+
+    def fixed_stress(self) -> list[list[Form]]:
+        """Preconditioning blocks: ``(1/K) M`` on p, zero-valued mass blocks on u.
+
+        The preconditioning matrix is ``J + M_beta``; the zero u blocks give it J's sparsity.
+        """
+        lay = self.layout
+        zero = fem.Constant(lay.mesh, default_scalar_type(0.0))
+        P = BlockForms(len(lay.fields))
+        for b, v, du in zip(lay.bodies, self.tests, self.trials, strict=True):
+            i = lay.block_of(b)
+            P.add_J(i, i, zero * ufl.inner(du, v) * self.dx_body(b))
+        P.add_J(1, 1, self.coef.beta * self.dp * self.q * self.dx)
+        return P.J

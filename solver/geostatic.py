@@ -1,0 +1,108 @@
+"""The geostatic initial state: K0 effective stress of horizontal soil layers.
+
+``sigma'_v(z) = -int_z^{z_top} (gamma_sat - GAMMA_W) dz`` over the soil layers (their elevation
+ranges, all-reduced over the ranks), ``sigma'_h = K0 sigma'_v``; ``z_top`` is the highest soil
+elevation (water table at the ground surface). Solids ("wished in place") take the stress and
+the buoyant weight of the soil layer they replace (zero above ground). Units kPa, m; tension
+positive, so the in-situ stresses are negative.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from mpi4py import MPI
+
+from pilegroup.geometry.meshdata import MeshData
+from pilegroup.solver.inputs import GAMMA_W, ElasticSolid, SoilMaterial
+from pilegroup.solver.qpstate import QuadratureState
+
+
+@dataclass(frozen=True)
+class Layer:
+    """Elevation range (m), buoyant unit weight (kN/m^3) and K0 of one soil group."""
+
+    z_min: float
+    z_max: float
+    gamma_b: float
+    k0: float
+
+
+class SoilColumn:
+    """The soil groups as horizontal layers (collective construction).
+
+    Args:
+        md: mesh and tags.
+        materials: cell-group name -> material; the :class:`SoilMaterial` groups are the layers.
+    """
+
+    def __init__(self, md: MeshData, materials: Mapping[str, SoilMaterial | ElasticSolid]
+                 ) -> None:
+        comm = md.mesh.comm
+        gx = md.mesh.geometry.x
+        cdm = md.mesh.geometry.dofmaps[0]
+        self.layers: list[Layer] = []
+        self.by_name: dict[str, Layer] = {}
+        for name, mat in materials.items():
+            if not isinstance(mat, SoilMaterial):
+                continue
+            cells = md.cell_tags.find(md.cell_tag(name))
+            z = gx[cdm[cells].reshape(-1), 2] if cells.size else None
+            zmin = comm.allreduce(float(z.min()) if z is not None else np.inf, op=MPI.MIN)
+            zmax = comm.allreduce(float(z.max()) if z is not None else -np.inf, op=MPI.MAX)
+            layer = Layer(zmin, zmax, mat.gamma_sat - GAMMA_W, mat.k0)
+            self.layers.append(layer)
+            self.by_name[name] = layer
+        self.z_top = max(lay.z_max for lay in self.layers) if self.layers else 0.0
+
+    def sigma_v(self, z: np.ndarray) -> np.ndarray:
+        """Vertical geostatic effective stress (kPa, negative) at elevations ``z`` (m)."""
+        s = np.zeros_like(z)
+        for lay in self.layers:
+            s -= lay.gamma_b * np.clip(np.minimum(lay.z_max, self.z_top)
+                                       - np.maximum(lay.z_min, z), 0.0, None)
+        return s
+
+    def buoyant_weight(self, z: np.ndarray) -> np.ndarray:
+        """Buoyant unit weight (kN/m^3) of the layer at each elevation (0 outside every layer)."""
+        return self._value(z, "gamma_b")
+
+    def k0(self, z: np.ndarray) -> np.ndarray:
+        """K0 of the layer at each elevation (0 outside every layer)."""
+        return self._value(z, "k0")
+
+    def _value(self, z: np.ndarray, key: str) -> np.ndarray:
+        out = np.zeros_like(z)
+        for lay in self.layers:
+            out[(z >= lay.z_min) & (z <= lay.z_max)] = getattr(lay, key)
+        return out
+
+    def stress(self, states: Sequence[QuadratureState]) -> dict[str, np.ndarray]:
+        """K0 effective stress at the quadrature points of each group (Mandel, kPa)."""
+        out = {}
+        for g in (g for qp in states for g in qp.groups):
+            z = g.x[:, 2]
+            sv = self.sigma_v(z)
+            k0 = g.material.k0 if isinstance(g.material, SoilMaterial) else self.k0(z)
+            s = np.zeros((g.n, 6))
+            s[:, 0] = s[:, 1] = k0 * sv
+            s[:, 2] = sv
+            out[g.name] = s
+        return out
+
+    def interface_traction(self, z: np.ndarray, soil_group: str | None) -> np.ndarray:
+        """In-situ local interface traction ``[sigma_n, 0, 0]`` (kPa) at heights ``z``.
+
+        Shafts (``soil_group`` the adjacent soil layer): ``K0 sigma'_v``; bases
+        (``soil_group = None``): ``sigma'_v``.
+        """
+        sv = self.sigma_v(z)
+        t = np.zeros((z.size, 3))
+        if soil_group is None:
+            t[:, 0] = sv
+        else:
+            layer = self.by_name.get(soil_group)
+            t[:, 0] = (layer.k0 if layer is not None else self.k0(z)) * sv
+        return t

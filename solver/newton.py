@@ -1,0 +1,146 @@
+"""Newton's method with a backtracking line search, over a small problem protocol.
+
+The driver knows nothing of forms or meshes. A problem offers (see
+:class:`~pilegroup.solver.problem.BiotProblem`):
+
+* ``set_step(dt, load_factor)``: step size, loads and prescribed values; fields -> ``x``;
+* ``residual_state(load_factor) -> (block norms, plate gap)``: evaluate the laws at the
+  current fields and assemble the residual ``b`` (raises ``ConvergenceError`` on NaN);
+* ``force_scales(load_factor)``: force scales (kN) of the displacement blocks;
+* ``assemble_jacobian()`` and ``solve_linear(b, dx) -> Krylov iterations``;
+* ``x``, ``b``, ``dx`` (PETSc block vectors), ``layout`` (``x_to_fields``, ``block_norms``,
+  ``u_blocks``) and ``plate`` (``None`` or a rigid plate with ``border`` and ``set``).
+
+Convergence (every block): ``|r_i| <= rtol * ref_i + atol``, with ``ref_i`` the largest
+residual norm of the block seen at the start of a step so far in the run; the displacement
+blocks share one force reference (kN): the largest of their internal forces (the current stress,
+geostatic state included), the plate force and those residuals, because the bodies exchange
+their forces through the interface, whose imbalance shows in both (as ABAQUS takes one
+time-averaged force per field). Or: the increment is below ``stol`` times the solution, block
+by block. A step never accepts a non-converged state.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+import numpy as np
+from petsc4py import PETSc
+
+from pilegroup.solver.errors import ConvergenceError
+from pilegroup.solver.inputs import NewtonOptions
+
+if TYPE_CHECKING:
+    from pilegroup.solver.problem import BiotProblem
+
+
+@dataclass
+class StepInfo:
+    """Outcome of one attempted step."""
+
+    converged: bool
+    newton_its: int = 0
+    ksp_its: int = 0
+    residuals: list[tuple[float, ...]] = field(default_factory=list)
+    message: str = ""
+    seconds: float = 0.0
+
+
+class NewtonSolver:
+    """Newton iterations of one step; keeps the run's residual references between steps."""
+
+    def __init__(self, problem: BiotProblem, options: NewtonOptions) -> None:
+        self.problem = problem
+        self.options = options
+        self.R_run = np.zeros(len(problem.layout.fields))
+
+    def solve(self, dt: float, load_factor: float) -> StepInfo:
+        """Solve one step; never raises on non-convergence (``converged = False``)."""
+        t_start = time.perf_counter()
+        pb, nw = self.problem, self.options
+        pb.set_step(dt, load_factor)
+        info = StepInfo(converged=False)
+        ok_inc = False
+        try:
+            rn, gap = pb.residual_state(load_factor)
+            ref = self._reference(rn, load_factor)
+            for it in range(nw.max_it + 1):
+                info.residuals.append(tuple(float(r) for r in rn))
+                if it >= 1 and (self._small(rn, gap, ref, load_factor) or ok_inc):
+                    info.converged = True
+                    break
+                if it == nw.max_it:
+                    info.message = f"no convergence in {nw.max_it} iterations; |r| = {rn}"
+                    break
+                pb.assemble_jacobian()
+                info.ksp_its += pb.solve_linear(pb.b, pb.dx)
+                dU = pb.plate.border(pb, load_factor) if pb.plate is not None else 0.0
+                dxn = pb.layout.block_norms(pb.dx)
+                if not np.all(np.isfinite(dxn)):
+                    raise ConvergenceError("NaN Newton increment")
+                xn = pb.layout.block_norms(pb.x)
+                ok_inc = bool(np.all(dxn <= nw.stol * np.maximum(xn, 1e-300)))
+                info.newton_its = it + 1
+                rn, gap = self._line_search(rn, gap, ref, dU, load_factor)
+        except ConvergenceError as exc:
+            info.converged = False
+            info.message = str(exc)
+        except PETSc.Error as exc:  # pragma: no cover - PETSc failures are reported, not hidden
+            info.converged = False
+            info.message = f"PETSc error {exc}"
+        info.seconds = time.perf_counter() - t_start
+        return info
+
+    def _reference(self, rn: np.ndarray, load_factor: float) -> np.ndarray:
+        """Residual references of the step (see the module docstring); updates the run's."""
+        pb = self.problem
+        ref = np.maximum(self.R_run, rn)
+        u_blocks = pb.layout.u_blocks
+        for i, fn in zip(u_blocks, pb.force_scales(), strict=True):
+            ref[i] = max(ref[i], fn)
+        if pb.plate is not None:
+            ib = pb.layout.block_of(pb.layout.bodies[pb.plate.body])
+            ref[ib] = max(ref[ib], abs(pb.plate.target(load_factor)))
+        ref[u_blocks] = np.max(ref[u_blocks])
+        self.R_run = np.maximum(self.R_run, ref)
+        return ref
+
+    def _small(self, rn: np.ndarray, gap: float, ref: np.ndarray, load_factor: float) -> bool:
+        """Residual test of every block (and of the plate force)."""
+        nw, plate = self.options, self.problem.plate
+        ok = bool(np.all(rn <= nw.rtol * ref + nw.atol))
+        if plate is not None:
+            fscale = max(abs(plate.target(load_factor)), 1e-30)
+            ok = ok and abs(gap) <= nw.rtol * fscale + nw.atol
+        return ok
+
+    def _line_search(self, rn: np.ndarray, gap: float, ref: np.ndarray, dU: float,
+                     load_factor: float) -> tuple[np.ndarray, float]:
+        """Backtracking on the scaled residual (only acts when it grows); updates ``x``."""
+        pb, nw, plate = self.problem, self.options, self.problem.plate
+        scale = np.maximum(ref, nw.atol)
+        gscale = max(abs(plate.target(load_factor)), nw.atol) if plate is not None else 1.0
+        m0 = float(np.sum(rn / scale)) + abs(gap) / gscale
+        x_old = pb.x.copy()
+        U_old = plate.value - dU if plate is not None else 0.0
+        alpha = 1.0
+        for ls in range(nw.line_search + 1):
+            pb.x.array[:] = x_old.array_r
+            pb.x.axpy(-alpha, pb.dx)
+            if plate is not None:
+                plate.set(U_old + alpha * dU)
+            pb.layout.x_to_fields(pb.x)
+            try:
+                rn, gap = pb.residual_state(load_factor)
+                m1 = float(np.sum(rn / scale)) + abs(gap) / gscale
+            except ConvergenceError:
+                if ls == nw.line_search:
+                    raise
+                m1 = np.inf
+            if m1 <= (1.0 - 1e-4 * alpha) * m0 or ls == nw.line_search:
+                break
+            alpha *= 0.5
+        x_old.destroy()
+        return rn, gap

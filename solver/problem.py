@@ -1,0 +1,430 @@
+"""u–p Biot consolidation of elastoplastic soil with elastic piles and cap.
+
+Physics and units: docs/model.md (kN, m, day; tension positive; ``p`` = excess pore pressure,
+compression of the water positive; effective stress ``sigma' = sigma + p I``). The weak form is
+built term by term in :mod:`.forms`; bodies, spaces and block layout in :mod:`.layout`;
+boundary conditions and the rigid plate in :mod:`.constraints`; the geostatic state in
+:mod:`.geostatic`; Newton in :mod:`.newton`.
+
+:class:`BiotProblem` is built in named steps (``_define_*``) and offers the protocol the Newton
+driver, the stepper, the exports and the finite-difference Jacobian tests work through:
+``set_step``, ``evaluate_laws``, ``assemble_residual``, ``assemble_jacobian``,
+``solve_linear``, ``commit``, ``rollback``; plus what outputs need (``bodies``, ``body``,
+``body_of_facet``, ``sub_facets``, ``interface``, ``p``).
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Mapping, Sequence
+
+import numpy as np
+from dolfinx import fem, la
+from dolfinx.cpp.la.petsc import create_index_sets
+from dolfinx.fem import petsc as fpetsc
+from mpi4py import MPI
+from petsc4py import PETSc
+
+from pilegroup.geometry import groups
+from pilegroup.geometry.meshdata import MeshData
+from pilegroup.solver.constraints import Constraints, RigidPlateControl
+from pilegroup.solver.errors import ConvergenceError, SolverInputError
+from pilegroup.solver.forms import Coefficients, FormBuilder
+from pilegroup.solver.geostatic import SoilColumn
+from pilegroup.solver.inputs import (
+    Discretisation,
+    DisplacementBC,
+    ElasticSolid,
+    InterfaceCoupling,
+    PressureBC,
+    RigidPlate,
+    SoilMaterial,
+    SolverOptions,
+    SurfaceLoad,
+)
+from pilegroup.solver.interface import NodalInterface
+from pilegroup.solver.interface_gauss import GaussInterface
+from pilegroup.solver.layout import BlockLayout, Body
+from pilegroup.solver.linsolve import LinearSolver, create_ksp, get_preset
+from pilegroup.solver.newton import NewtonSolver, StepInfo
+
+
+class BiotProblem:
+    """Coupled u–p problem with quadrature-point soil state and its own Newton solver.
+
+    Args:
+        md: mesh and tags.
+        materials: cell-group name -> :class:`SoilMaterial` or :class:`ElasticSolid`; every
+            cell must be covered. With solids, the pressure lives on the soil sub-mesh only.
+        disc: element pair.
+        displacement_bcs: prescribed displacement components.
+        pressure_bcs: prescribed excess pore pressures (drained boundaries).
+        loads: surface pressures.
+        plates: rigid plates under force control (at most one).
+        options: linear solver and Newton options.
+        self_weight: apply the buoyant weight (geostatic stress must then balance it).
+        interface: give piles and cap their own displacement field, joined to the soil only by
+            the zero-thickness interface (:class:`NodalInterface`, or :class:`GaussInterface`
+            with ``quadrature="gauss"``); ``None`` ties them.
+    """
+
+    def __init__(
+        self,
+        md: MeshData,
+        materials: Mapping[str, SoilMaterial | ElasticSolid],
+        disc: Discretisation | None = None,
+        displacement_bcs: Sequence[DisplacementBC] = (),
+        pressure_bcs: Sequence[PressureBC] = (),
+        loads: Sequence[SurfaceLoad] = (),
+        plates: Sequence[RigidPlate] = (),
+        options: SolverOptions | None = None,
+        self_weight: bool = True,
+        interface: InterfaceCoupling | None = None,
+    ) -> None:
+        self.md, self.mesh, self.comm = md, md.mesh, md.mesh.comm
+        self.disc = disc = disc or Discretisation()
+        self.options = options or SolverOptions()
+        self.coupling = interface
+        self.timings = {"assemble_F": 0.0, "assemble_J": 0.0, "solve": 0.0, "law": 0.0}
+        self.layout = BlockLayout(md, materials, disc, separate=interface is not None)
+        self.column = SoilColumn(md, materials)
+        self.coef = Coefficients(self.layout, disc, self.column)
+        self.interface = self._define_interface(interface)
+        self._define_forms(loads, self_weight)
+        self.constraints = Constraints(self.layout, displacement_bcs, pressure_bcs, plates,
+                                       self.interface)
+        self._define_algebra()
+        self.newton = NewtonSolver(self, self.options.newton)
+        self.load_factor = 0.0
+        self.undrained = False
+        for b in self.bodies:
+            b.qp.initialise({})
+
+    # ------------------------------------------------------------------ construction
+    def _define_interface(self, coupling: InterfaceCoupling | None) -> NodalInterface | None:
+        """The interface object of the coupling (``None`` when the piles are tied)."""
+        if coupling is None:
+            return None
+        if coupling.quadrature == "gauss" and self.disc.u_degree != 1:
+            raise SolverInputError(
+                f"InterfaceCoupling.quadrature = 'gauss' with pair = {self.disc.pair!r}; "
+                "allowed: pair 'Q1Q1' (or quadrature 'nodal')")
+        cls = GaussInterface if coupling.quadrature == "gauss" else NodalInterface
+        lay = self.layout
+        return cls(self.md, lay.split, lay.body("structure").V, lay.body("soil").V,
+                   list(coupling.laws), coupling.traction0 or self._interface_traction0)
+
+    def _interface_traction0(self, z: np.ndarray, m: int) -> np.ndarray:
+        """In-situ local traction of interface group ``m`` at heights ``z`` (kPa)."""
+        L = self.layout.split.n_layers
+        return self.column.interface_traction(z, groups.soil_layer(m + 1) if m < L else None)
+
+    def _define_forms(self, loads: Sequence[SurfaceLoad], self_weight: bool) -> None:
+        """Every term of the weak form, compiled once."""
+        fb = FormBuilder(self.layout, self.disc, self.coef)
+        fb.momentum(self_weight)
+        self._load_consts = fb.surface_loads(loads)
+        fb.mass_balance()
+        self.stabilised = self.disc.pair == "Q1Q1" and self.disc.stabilise
+        if self.stabilised:
+            fb.stabilisation()
+        if self.interface is not None:
+            fb.interface(self.interface)
+        em = self.layout.emaps
+        jo = dict(self.options.jit_options) if self.options.jit_options is not None else None
+
+        def compile_(forms: object) -> object:
+            return fem.form(forms, entity_maps=em, jit_options=jo)
+
+        self.F_forms = compile_(fb.forms.F)
+        self.J_forms = compile_(fb.forms.J)
+        self._F_u_forms = [compile_(fb.forms.F[self.layout.block_of(b)]) for b in self.bodies]
+        self._Fint_forms = [compile_(fb.internal_force(b)) for b in self.bodies]
+        self._P_forms = compile_(fb.fixed_stress()) \
+            if get_preset(self.options.preset).fixed_stress else None
+
+    def _define_algebra(self) -> None:
+        """PETSc matrices, vectors and the linear solver (created once; sparsity reused)."""
+        self.A = fpetsc.create_matrix(self.J_forms)
+        self.P: PETSc.Mat | None = None
+        self._Mbeta = fpetsc.create_matrix(self._P_forms) if self._P_forms is not None else None
+        self.spaces = fem.extract_function_spaces(self.F_forms)
+        self.b, self.x, self.dx, self.tmp = (fpetsc.create_vector(self.spaces) for _ in range(4))
+        is_u = is_p = nns = None
+        opts = self.options
+        if get_preset(opts.preset).fieldsplit:
+            is_u, is_p = self.layout.index_sets(self.A)
+            nns = self.layout.rigid_body_modes()
+        ksp = create_ksp(self.comm, self.A, self.P, opts.prefix, opts.preset, opts.overrides,
+                         is_u, is_p, nns)
+        self.linear_solver = LinearSolver(ksp, opts.preset)
+        self._matrix_key: float | None = None  # dt of the assembled matrix (linear reuse)
+        self._itf_is: list[PETSc.IS] | None = None  # index sets for the interface's matrix
+
+    # ------------------------------------------------------------------ what outputs read
+    @property
+    def bodies(self) -> list[Body]:
+        """The displacement bodies (``[all]`` tied; ``[soil, structure]`` with an interface)."""
+        return self.layout.bodies
+
+    def body(self, role: str) -> Body:
+        """The body of ``role`` (``"soil"``/``"structure"``; the whole mesh when tied)."""
+        return self.layout.body(role)
+
+    def body_of_facet(self, name: str) -> Body:
+        """The body whose cells carry the facet group ``name`` (collective)."""
+        return self.layout.body_of_facet(name)
+
+    def sub_facets(self, body: Body, facets: np.ndarray) -> np.ndarray:
+        """Parent facets -> the facets of ``body``'s mesh."""
+        return self.layout.sub_facets(body, facets)
+
+    @property
+    def u(self) -> fem.Function:
+        """Displacement of the soil (the whole mesh when tied), m."""
+        return self.layout.bodies[0].u
+
+    @property
+    def p(self) -> fem.Function:
+        """Excess pore pressure, kPa (compression positive)."""
+        return self.layout.p
+
+    @property
+    def Q(self) -> fem.FunctionSpace:
+        """Pressure space (on the soil cells)."""
+        return self.layout.Q
+
+    @property
+    def p_mesh(self) -> object:
+        """The mesh of the pressure (the soil sub-mesh when there are solids)."""
+        return self.layout.p_mesh
+
+    @property
+    def has_solids(self) -> bool:
+        """Whether any cell group is an elastic solid."""
+        return self.layout.has_solids
+
+    @property
+    def num_dofs(self) -> int:
+        """Global number of unknowns (u and p)."""
+        return self.layout.num_dofs
+
+    @property
+    def plate(self) -> RigidPlateControl | None:
+        """The force-controlled rigid plate, if any."""
+        return self.constraints.plate
+
+    @property
+    def plate_U(self) -> float:
+        """Current rigid-plate displacement, m (0 without a plate)."""
+        return self.plate.value if self.plate is not None else 0.0
+
+    @property
+    def refactorisations(self) -> int:
+        """LU factorisations made by a factorisation-reuse preset."""
+        return self.linear_solver.refactorisations
+
+    def max_displacement(self) -> float:
+        """Largest nodal displacement magnitude, m (all ranks)."""
+        return self.layout.max_displacement()
+
+    def reaction(self, facet: str, component: int) -> float:
+        """Resultant (kN) of the unconstrained momentum residual on a facet group.
+
+        The reaction of the constraint, ``int sigma_total . n`` over the facets (tension
+        positive), at the current state.
+        """
+        b = self.body_of_facet(facet)
+        dofs = self.layout.facet_dofs(b, facet, component)
+        owned = dofs[dofs < b.V.dofmap.index_map.size_local * 3]
+        return self.block_resultant(owned, self.bodies.index(b))
+
+    def block_resultant(self, owned: np.ndarray, body: int) -> float:
+        """Sum (kN) of body ``body``'s unconstrained residual over owned dofs ``owned``."""
+        vec = fem.assemble_vector(self._F_u_forms[body])
+        vec.scatter_reverse(la.InsertMode.add)
+        return float(self.comm.allreduce(float(vec.array[owned].sum()), op=MPI.SUM))
+
+    def force_scales(self) -> list[float]:
+        """Euclidean norms (kN) of each body's internal force ``int sigma' : eps(v)``."""
+        out = []
+        for b, form in zip(self.bodies, self._Fint_forms, strict=True):
+            vec = fem.assemble_vector(form)
+            vec.scatter_reverse(la.InsertMode.add)
+            n = b.V.dofmap.index_map.size_local * 3
+            loc = float(vec.array[:n] @ vec.array[:n])
+            out.append(float(np.sqrt(self.comm.allreduce(loc, op=MPI.SUM))))
+        return out
+
+    # ------------------------------------------------------------------ the step protocol
+    def solve_step(self, dt: float, load_factor: float) -> StepInfo:
+        """Solve one backward-Euler step of size ``dt`` (day) at ``load_factor`` (Newton).
+
+        Never raises on non-convergence: returns ``StepInfo(converged=False)`` and leaves the
+        trial state uncommitted; the caller calls :meth:`commit` or :meth:`rollback`.
+        """
+        return self.newton.solve(dt, load_factor)
+
+    def set_step(self, dt: float, load_factor: float) -> None:
+        """Step size, loads and prescribed values (put into the fields); fields -> ``x``."""
+        self.coef.dt.value = dt
+        self.load_factor = load_factor
+        self.undrained = dt == 0.0
+        for ld, c in self._load_consts:
+            c.value = ld.pressure * (load_factor if ld.ramp else 1.0)
+        self.constraints.set_load(load_factor)
+        self.constraints.apply_values(self.undrained)
+        self.layout.fields_to_x(self.x)
+
+    def active(self, bcs: list[fem.DirichletBC]) -> list[fem.DirichletBC]:
+        """The conditions in force in the current step (drainage released when undrained)."""
+        return self.constraints.active(bcs, self.undrained)
+
+    def evaluate_laws(self) -> None:
+        """Evaluate every law at the current fields (stress, tangent, interface traction)."""
+        t0 = time.perf_counter()
+        dt = float(self.coef.dt.value)
+        for b in self.bodies:
+            b.qp.evaluate(dt)
+        if self.interface is not None:
+            self.interface.update(self.body("structure").u, self.body("soil").u, dt)
+        self.timings["law"] += time.perf_counter() - t0
+
+    def residual_state(self, load_factor: float) -> tuple[np.ndarray, float]:
+        """Laws and residual at the current fields: (block norms, plate force gap)."""
+        self.evaluate_laws()
+        for b in self.bodies:
+            if not b.qp.all_finite():
+                raise ConvergenceError("NaN/inf stress from the constitutive law "
+                                       f"{b.qp.last_error}".rstrip())
+        if self.interface is not None:
+            ok = bool(np.all(np.isfinite(self.interface.T.x.array)))
+            if not self.comm.allreduce(ok, op=MPI.LAND):
+                raise ConvergenceError("NaN/inf traction from the interface law")
+        self.assemble_residual()
+        rn = self.layout.block_norms(self.b)
+        if not np.all(np.isfinite(rn)):
+            raise ConvergenceError("NaN residual")
+        gap = self.plate.gap(self, load_factor) if self.plate is not None else 0.0
+        return rn, gap
+
+    def assemble_residual(self) -> None:
+        """Residual ``b`` with zero rows at constrained dofs (their values are imposed)."""
+        t0 = time.perf_counter()
+        b = self.b
+        with b.localForm() as bl:
+            bl.set(0.0)
+        fpetsc.assemble_vector(b, self.F_forms)
+        b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        fpetsc.set_bc(b, fem.bcs_by_block(self.spaces, self.active(self.constraints.bcs_zero)))
+        b.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+        self.timings["assemble_F"] += time.perf_counter() - t0
+
+    def _linear(self) -> bool:
+        """Linear problem: every law linear (interface laws declare ``linear = True``)."""
+        lin = all(b.qp.linear for b in self.bodies)
+        if self.interface is not None:
+            lin = lin and all(getattr(g["law"], "linear", False) for g in self.interface.groups
+                              if g["law"] is not None)
+        return lin
+
+    def assemble_jacobian(self, force: bool = False) -> bool:
+        """Assemble ``A`` (and the preconditioning matrix); returns whether it did.
+
+        Skipped for linear problems with an unchanged dt unless ``force``.
+        """
+        key = float(self.coef.dt.value)
+        if not force and self._linear() and self._matrix_key == key:
+            return False
+        t0 = time.perf_counter()
+        bcs = self.active(self.constraints.bcs)
+        self.A.zeroEntries()
+        fpetsc.assemble_matrix(self.A, self.J_forms, bcs=bcs, diag=1.0)
+        self.A.assemble()
+        if self.interface is not None and self.interface.has_matrix:
+            self._add_interface_matrix(bcs)
+        if self._Mbeta is not None:
+            self._assemble_fixed_stress(bcs)
+        self.linear_solver.set_operators(self.A, self.P)
+        self._matrix_key = key
+        if self.plate is not None:
+            self.plate.db = None
+        self.timings["assemble_J"] += time.perf_counter() - t0
+        return True
+
+    def _assemble_fixed_stress(self, bcs: list[fem.DirichletBC]) -> None:
+        """``P = J + M_beta`` (one axpy on J's sparsity)."""
+        self._Mbeta.zeroEntries()
+        fpetsc.assemble_matrix(self._Mbeta, self._P_forms, bcs=bcs, diag=0.0)
+        self._Mbeta.assemble()
+        if self.P is None:
+            self.P = self.A.duplicate(copy=True)
+        else:
+            self.A.copy(self.P, structure=PETSc.Mat.Structure.SAME_NONZERO_PATTERN)
+        self.P.axpy(1.0, self._Mbeta, structure=PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
+
+    def _add_interface_matrix(self, bcs: list[fem.DirichletBC]) -> None:
+        """Add the interface's own (non-form) tangent to ``A`` (Gauss-point quadrature)."""
+        if self._itf_is is None:
+            self._itf_is = create_index_sets(
+                [(V.dofmap.index_map, V.dofmap.index_map_bs) for V in self.spaces])
+        lay = self.layout
+        i_s, i_t = lay.block_of(lay.body("soil")), lay.block_of(lay.body("structure"))
+        by_block = fem.bcs_by_block(self.spaces, bcs)
+
+        def constrained(i: int) -> np.ndarray:
+            return np.concatenate([bc.dof_indices()[0] for bc in by_block[i]]
+                                  + [np.zeros(0, np.int32)])
+
+        self.interface.add_jacobian(self.A, self._itf_is[i_s], self._itf_is[i_t],
+                                    constrained(i_s), constrained(i_t))
+
+    def solve_linear(self, rhs: PETSc.Vec, sol: PETSc.Vec) -> int:
+        """Solve with the current Jacobian; returns the Krylov iterations."""
+        t0 = time.perf_counter()
+        its = self.linear_solver.solve(rhs, sol, self.undrained)
+        self.timings["solve"] += time.perf_counter() - t0
+        return its
+
+    # ------------------------------------------------------------------ state management
+    def commit(self) -> None:
+        """Adopt the converged step: state committed, ``u_n, p_n`` updated."""
+        for b in self.bodies:
+            b.qp.commit()
+        if self.interface is not None:
+            self.interface.commit()
+        for f, fn in zip(self.layout.fields, self.layout.fields_n, strict=True):
+            fn.x.array[:] = f.x.array
+        if self.plate is not None:
+            self.plate.committed = self.plate.value
+
+    def rollback(self) -> None:
+        """Return to the last committed step (fields, plate and quadrature state)."""
+        for b in self.bodies:
+            b.qp.rollback()
+        if self.interface is not None:
+            self.interface.rollback()
+        for f, fn in zip(self.layout.fields, self.layout.fields_n, strict=True):
+            f.x.array[:] = fn.x.array
+        if self.plate is not None:
+            self.plate.set(self.plate.committed)
+
+    def reset_displacements(self) -> None:
+        """Set u (current and committed) to zero, keeping the stress state (after geostatic)."""
+        for b in self.bodies:
+            b.u.x.array[:] = 0.0
+            b.u_n.x.array[:] = 0.0
+        if self.interface is not None:
+            self.interface.reset_jump()
+        if self.plate is not None:
+            self.plate.value = self.plate.committed = 0.0
+
+    # ------------------------------------------------------------------ initial stress
+    def geostatic_stress(self) -> dict[str, np.ndarray]:
+        """K0 effective stress at the quadrature points of each group (Mandel, kPa)."""
+        return self.column.stress([b.qp for b in self.bodies])
+
+    def set_initial_stress(self, stress0: Mapping[str, np.ndarray | None]) -> None:
+        """Initialise every group's law state with ``stress0[name]`` ((n,6) Mandel kPa)."""
+        for b in self.bodies:
+            b.qp.initialise(dict(stress0))
