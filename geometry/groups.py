@@ -105,16 +105,25 @@ def embed_tag(i: int) -> int:
     return 700 + i
 
 
+def _numbers(pattern: re.Pattern[str], name: str) -> tuple[int, ...] | None:
+    """The integers captured by ``pattern`` in ``name``, or ``None`` when it does not match."""
+    m = pattern.match(name)
+    return tuple(int(g) for g in m.groups()) if m else None
+
+
+def _number(pattern: re.Pattern[str], name: str) -> int | None:
+    found = _numbers(pattern, name)
+    return found[0] if found else None
+
+
 def layer_of(name: str) -> int | None:
     """Soil layer (1-based) of a ``soil_layer_NN`` cell group, else ``None``."""
-    m = _SOIL.match(name)
-    return int(m.group(1)) if m else None
+    return _number(_SOIL, name)
 
 
 def pile_of(name: str) -> int | None:
     """Pile number of a ``pile_i`` cell group, else ``None``."""
-    m = _PILE.match(name)
-    return int(m.group(1)) if m else None
+    return _number(_PILE, name)
 
 
 def is_structure(name: str) -> bool:
@@ -124,20 +133,18 @@ def is_structure(name: str) -> bool:
 
 def shaft_of(name: str) -> tuple[int, int] | None:
     """(pile, layer) of a ``shaft_p{i}_l{jj}`` facet group, else ``None``."""
-    m = _SHAFT.match(name)
-    return (int(m.group(1)), int(m.group(2))) if m else None
+    found = _numbers(_SHAFT, name)
+    return (found[0], found[1]) if found else None
 
 
 def base_of(name: str) -> int | None:
     """Pile of a ``base_p{i}`` facet group, else ``None``."""
-    m = _BASE.match(name)
-    return int(m.group(1)) if m else None
+    return _number(_BASE, name)
 
 
 def head_of(name: str) -> int | None:
     """Pile of a ``head_p{i}`` facet group, else ``None``."""
-    m = _HEAD.match(name)
-    return int(m.group(1)) if m else None
+    return _number(_HEAD, name)
 
 
 def is_interface(name: str) -> bool:

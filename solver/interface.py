@@ -41,6 +41,7 @@ from typing import Any
 import numpy as np
 import ufl
 from dolfinx import fem, la
+from dolfinx import mesh as dmesh
 
 from pilegroup.geometry import groups
 from pilegroup.geometry.meshdata import MeshData
@@ -236,13 +237,15 @@ class NodalInterface:
         """The interface measure over every shaft and base facet (nodal quadrature)."""
         return self.dS(SHAFT) + self.dS(BASE)
 
-    def residual_forms(self, v_struct: Any, v_soil: Any) -> tuple[ufl.Form, ufl.Form]:
+    def residual_forms(self, v_struct: ufl.Argument, v_soil: ufl.Argument
+                       ) -> tuple[ufl.Form, ufl.Form]:
         """Interface contributions to the structure and soil momentum residuals."""
         t = self.T("-")
         dS = self.dS(SHAFT) + self.dS(BASE)
         return -ufl.inner(t, v_struct("+")) * dS, ufl.inner(t, v_soil("-")) * dS
 
-    def jacobian_forms(self, du_struct: Any, du_soil: Any, v_struct: Any, v_soil: Any
+    def jacobian_forms(self, du_struct: ufl.Argument, du_soil: ufl.Argument,
+                       v_struct: ufl.Argument, v_soil: ufl.Argument
                        ) -> list[list[ufl.Form]]:
         """Interface blocks ``[[J_ss', J_s's], ...]`` ordered (structure, soil)."""
         D = self.D("-")
@@ -374,7 +377,7 @@ class NodalInterface:
         self.jump.x.array[:] = 0.0
 
 
-def _n_local_cells(msh: Any) -> int:
+def _n_local_cells(msh: dmesh.Mesh) -> int:
     imap = msh.topology.index_map(msh.topology.dim)
     return imap.size_local + imap.num_ghosts
 

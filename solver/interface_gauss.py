@@ -151,8 +151,8 @@ class GaussInterface(NodalInterface):
         A = self.A[:, None]
         self.T.x.array[:] = np.divide(F, A, out=np.zeros_like(F), where=A > 0).ravel()
 
-    def add_jacobian(self, A: Any, is_soil: Any, is_struct: Any, bc_soil: np.ndarray,
-                     bc_struct: np.ndarray) -> None:
+    def add_jacobian(self, A: PETSc.Mat, is_soil: PETSc.IS, is_struct: PETSc.IS,
+                     bc_soil: np.ndarray, bc_struct: np.ndarray) -> None:
         """Add the facet tangents of the last :meth:`update` to the assembled matrix ``A``.
 
         ``is_soil``/``is_struct``: local index sets of the soil and structure displacement

@@ -47,6 +47,7 @@ from pilegroup.solver.interface_gauss import GaussInterface
 from pilegroup.solver.layout import BlockLayout, Body
 from pilegroup.solver.linsolve import LinearSolver, create_ksp, get_preset
 from pilegroup.solver.newton import NewtonSolver, StepInfo
+from pilegroup.solver.qpstate import QuadratureState
 
 
 class BiotProblem:
@@ -387,12 +388,15 @@ class BiotProblem:
         return its
 
     # ------------------------------------------------------------------ state management
+    def _stateful(self) -> list[QuadratureState | NodalInterface]:
+        """Everything with a committed and a trial state."""
+        out: list[QuadratureState | NodalInterface] = [b.qp for b in self.bodies]
+        return out + ([self.interface] if self.interface is not None else [])
+
     def commit(self) -> None:
         """Adopt the converged step: state committed, ``u_n, p_n`` updated."""
-        for b in self.bodies:
-            b.qp.commit()
-        if self.interface is not None:
-            self.interface.commit()
+        for st in self._stateful():
+            st.commit()
         for f, fn in zip(self.layout.fields, self.layout.fields_n, strict=True):
             fn.x.array[:] = f.x.array
         if self.plate is not None:
@@ -400,11 +404,9 @@ class BiotProblem:
 
     def rollback(self) -> None:
         """Return to the last committed step (fields, plate and quadrature state)."""
-        for b in self.bodies:
-            b.qp.rollback()
-        if self.interface is not None:
-            self.interface.rollback()
-        for f, fn in zip(self.layout.fields, self.layout.fields_n, strict=True):
+        for st in self._stateful():
+            st.rollback()
+        for fn, f in zip(self.layout.fields_n, self.layout.fields, strict=True):
             f.x.array[:] = fn.x.array
         if self.plate is not None:
             self.plate.set(self.plate.committed)

@@ -11,9 +11,20 @@ the committed one (the trial is simply discarded).
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING
 
+import basix
+import basix.ufl
 import numpy as np
+import ufl
+from dolfinx import fem
+from dolfinx import mesh as dmesh
+from mpi4py import MPI
+
+from pilegroup.constitutive.base import ConstitutiveLaw
+
+if TYPE_CHECKING:
+    from pilegroup.solver.inputs import ElasticSolid, SoilMaterial
 
 
 @dataclass
@@ -21,7 +32,7 @@ class MaterialPoints:
     """Quadrature points of one material group (owned cells only)."""
 
     name: str
-    material: Any
+    material: SoilMaterial | ElasticSolid
     cells: np.ndarray
     dofs: np.ndarray  # (n_cells * nqp,) block indices into the quadrature spaces
     x: np.ndarray  # (n_points, 3) coordinates, m
@@ -44,13 +55,9 @@ class QuadratureState:
         strain_increment: UFL expression of the Mandel strain increment (6-vector).
     """
 
-    def __init__(self, mesh: Any, groups: dict[str, tuple[Any, np.ndarray]], degree: int,
-                 strain_increment: Any) -> None:
-        import basix
-        import basix.ufl
-        import ufl
-        from dolfinx import fem
-
+    def __init__(self, mesh: dmesh.Mesh,
+                 groups: dict[str, tuple[SoilMaterial | ElasticSolid, np.ndarray]], degree: int,
+                 strain_increment: ufl.core.expr.Expr) -> None:
         self.mesh = mesh
         cell = mesh.basix_cell()
         self.points, self.weights = basix.make_quadrature(cell, degree)
@@ -115,8 +122,6 @@ class QuadratureState:
 
     def all_finite(self) -> bool:
         """True when every trial stress is finite on every rank (collective)."""
-        from mpi4py import MPI
-
         ok = bool(np.all(np.isfinite(self.stress.x.array)))
         return bool(self.mesh.comm.allreduce(ok, op=MPI.LAND))
 
@@ -146,7 +151,7 @@ class QuadratureState:
         return out
 
 
-def _is_linear(law: Any) -> bool:
+def _is_linear(law: ConstitutiveLaw) -> bool:
     """A law is linear when it declares ``linear = True`` or is the LinearElastic law."""
     flag = getattr(law, "linear", None)
     if flag is not None:

@@ -1,0 +1,104 @@
+"""The package's structure: one-way imports without circles, small modules and functions.
+
+Read from the source with ``ast`` (nothing is imported): every ``pilegroup.*`` import at run
+time (imports under ``if TYPE_CHECKING:`` are for annotations only) is an edge between modules.
+Limits (docs/architecture.md): modules up to 500 lines and functions up to 80 lines, unless the
+module docstring says why (a line starting ``Size:``).
+"""
+
+import ast
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+FOLDERS = {"model": "pilegroup.model", "geometry": "pilegroup.geometry",
+           "constitutive": "pilegroup.constitutive", "solver": "pilegroup.solver",
+           "studies": "pilegroup.studies", "src/pilegroup": "pilegroup"}
+#: Which layer may import which (data flows one way: model -> geometry -> solver -> studies).
+LAYER = {"pilegroup": 0, "pilegroup.constitutive": 1, "pilegroup.model": 1,
+         "pilegroup.geometry": 2, "pilegroup.solver": 3, "pilegroup.studies": 4,
+         "pilegroup.__main__": 5}
+MAX_MODULE, MAX_FUNCTION = 500, 80
+
+
+def _modules() -> dict[str, Path]:
+    out = {}
+    for folder, pkg in FOLDERS.items():
+        for path in sorted((ROOT / folder).rglob("*.py")):
+            rel = path.relative_to(ROOT / folder).with_suffix("")
+            parts = [p for p in rel.parts if p != "__init__"]
+            out[".".join([pkg, *parts])] = path
+    return out
+
+
+def _is_type_checking(node: ast.If) -> bool:
+    t = node.test
+    return (isinstance(t, ast.Name) and t.id == "TYPE_CHECKING") or (
+        isinstance(t, ast.Attribute) and t.attr == "TYPE_CHECKING")
+
+
+def _imports(tree: ast.AST, known: set[str]) -> set[str]:
+    found: set[str] = set()
+
+    def visit(node: ast.AST) -> None:
+        if isinstance(node, ast.If) and _is_type_checking(node):
+            for child in node.orelse:
+                visit(child)
+            return
+        if isinstance(node, ast.Import):
+            found.update(a.name for a in node.names)
+        elif isinstance(node, ast.ImportFrom) and node.module:
+            found.add(node.module)
+            found.update(f"{node.module}.{a.name}" for a in node.names)
+        for child in ast.iter_child_nodes(node):
+            visit(child)
+
+    visit(tree)
+    return {m for m in found if m in known}
+
+
+def _layer(module: str) -> int:
+    return max(v for k, v in LAYER.items() if module == k or module.startswith(k + "."))
+
+
+GRAPH = {m: _imports(ast.parse(p.read_text()), set(_modules()))
+         for m, p in _modules().items()}
+
+
+def test_no_import_circle():
+    state: dict[str, int] = {}
+
+    def walk(m: str, stack: list[str]) -> None:
+        state[m] = 1
+        for n in sorted(GRAPH[m]):
+            if n == m or n.startswith(m + "."):
+                continue  # a package importing its own modules
+            assert state.get(n) != 1, "import circle: " + " -> ".join([*stack, m, n])
+            if n not in state:
+                walk(n, [*stack, m])
+        state[m] = 2
+
+    for m in sorted(GRAPH):
+        if m not in state:
+            walk(m, [])
+
+
+def test_imports_flow_one_way():
+    wrong = [(m, n) for m, ns in GRAPH.items() for n in ns if _layer(n) > _layer(m)]
+    assert not wrong, wrong
+
+
+@pytest.mark.parametrize("module", sorted(_modules()))
+def test_module_and_function_sizes(module):
+    path = _modules()[module]
+    text = path.read_text()
+    tree = ast.parse(text)
+    doc = ast.get_docstring(tree) or ""
+    if any(line.startswith("Size:") for line in doc.splitlines()):
+        return
+    assert text.count("\n") <= MAX_MODULE, f"{path}: {text.count(chr(10))} lines"
+    long = [(n.name, n.end_lineno - n.lineno + 1) for n in ast.walk(tree)
+            if isinstance(n, ast.FunctionDef | ast.AsyncFunctionDef)
+            and n.end_lineno - n.lineno + 1 > MAX_FUNCTION]
+    assert not long, f"{path}: {long}"
