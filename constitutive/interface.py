@@ -52,7 +52,8 @@ from pilegroup.validate import (
     require_positive,
 )
 
-# delta_eq17 and dp_outer_cone (defined in constitutive.paper) are part of this law's API.
+# delta_eq17 and dp_outer_cone are defined in constitutive.paper; callers of this law import
+# them from here too.
 __all__ = ["PileSoilInterface", "delta_eq17", "dp_outer_cone"]
 
 _TINY = 1e-300

@@ -1,7 +1,8 @@
 """The source paper's closed-form relations (Eqs. 13 and 17) and its Table 1 (Pier 667).
 
-The formulas are pure math on scalars: the interface and soil laws use them, and so does the
-scenario model (``pilegroup.model`` derives a layer's interface friction angle from Eq. 17).
+The formulas are pure math on scalars: the interface and soil laws use them (the laws with an
+Eq. 13 cone get ``alpha`` and ``k`` from :class:`DruckerPragerCone`), and so does the scenario
+model (``pilegroup.model`` derives a layer's interface friction angle from Eq. 17).
 
 Table 1 is reference data: the scenario in ``pilegroup.model`` is the source of truth for runs;
 this copy only feeds the constitutive tests and benchmarks. Units as in the paper's table: E in

@@ -1,7 +1,8 @@
 """pilegroup.model: the scenario — typed, validated input data, TOML loading, units.
 
-Imports neither dolfinx nor gmsh. The error classes are defined in :mod:`pilegroup.errors`;
-the ones users of the model meet are re-exported here.
+Imports neither dolfinx nor gmsh; from ``pilegroup.constitutive`` only the pure formula of
+Eq. 17 (:mod:`pilegroup.constitutive.paper`). The error classes are defined in
+:mod:`pilegroup.errors`; the ones users of the model meet are re-exported here.
 """
 
 from pilegroup.errors import ConvergenceError, PilegroupError, ScenarioError
