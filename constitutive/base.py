@@ -13,7 +13,8 @@ Conventions (whole package)
 
 The protocol
 ------------
-Every law is a frozen dataclass built from scalar parameters, with
+Every law is a frozen dataclass built from scalar parameters, checked when it is built
+(:mod:`pilegroup.validate` with :class:`~pilegroup.errors.ConstitutiveError`), with
 
 * ``state_layout() -> dict[str, int]``: state name -> components per point (always "stress" or,
   for the interface, "traction");
@@ -29,32 +30,12 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
+from pilegroup.errors import ConstitutiveError
+
 SQRT2 = float(np.sqrt(2.0))
 
 #: Mandel identity vector (second-order identity tensor).
 MANDEL_I = np.array([1.0, 1.0, 1.0, 0.0, 0.0, 0.0])
-
-
-class ConstitutiveError(ValueError):
-    """Invalid parameter or input of a constitutive law."""
-
-
-def check_param(name: str, value: float, unit: str, lo: float, hi: float,
-                lo_open: bool = False, hi_open: bool = False) -> None:
-    """Raise :class:`ConstitutiveError` unless ``lo <= value <= hi`` (bounds optionally open).
-
-    The message names the parameter, its value, its unit and the allowed range.
-    """
-    v = float(value)
-    ok = np.isfinite(v)
-    ok = ok and (v > lo if lo_open else v >= lo)
-    ok = ok and (v < hi if hi_open else v <= hi)
-    if not ok:
-        lb = "(" if lo_open else "["
-        rb = ")" if hi_open else "]"
-        raise ConstitutiveError(
-            f"{name} = {value!r} {unit} is out of range; allowed: {lb}{lo}, {hi}{rb} {unit}"
-        )
 
 
 @runtime_checkable

@@ -38,35 +38,53 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from functools import cached_property
+from typing import NamedTuple
 
 import numpy as np
 
-from pilegroup.constitutive.base import ConstitutiveError, as_points, check_param
+from pilegroup.constitutive.base import as_points
+from pilegroup.constitutive.paper import DruckerPragerCone, delta_eq17, dp_outer_cone
+from pilegroup.errors import ConstitutiveError
+from pilegroup.validate import (
+    require_in_range,
+    require_non_negative,
+    require_one_of,
+    require_positive,
+)
 
+# delta_eq17 and dp_outer_cone are defined in constitutive.paper; callers of this law import
+# them from here too.
 __all__ = ["PileSoilInterface", "delta_eq17", "dp_outer_cone"]
 
 _TINY = 1e-300
 
 
-def delta_eq17(phi_deg: float) -> float:
-    """Interface friction angle of Eq. 17, degrees: ``atan(sin phi cos phi / (1 + sin^2 phi))``."""
-    ph = math.radians(phi_deg)
-    return math.degrees(math.atan(math.sin(ph) * math.cos(ph) / (1.0 + math.sin(ph) ** 2)))
+class _Normal(NamedTuple):
+    """Normal response of one step, per point (penalty in contact, free when detached)."""
+
+    gap: np.ndarray  #: normal opening after the step, m (> 0: detached)
+    contact: np.ndarray  #: bool, ``gap <= 0``
+    s: np.ndarray  #: sigma_n, kPa (tension positive)
+    a: np.ndarray  #: hyperbola coefficient a of Eq. 6, m/kPa
+    b: np.ndarray  #: hyperbola coefficient b of Eq. 7, 1/kPa
+    p: np.ndarray  #: compressive normal stress floored at p_floor, kPa
+    s_n: np.ndarray  #: d sigma_n / d opening, kPa/m
+    p_n: np.ndarray  #: d p / d opening, kPa/m
 
 
-def dp_outer_cone(c: float, phi_deg: float) -> tuple[float, float]:
-    """Drucker–Prager ``(alpha, k)`` of Eq. 13 (outer cone, compression meridian), k in kPa.
+class _Shear(NamedTuple):
+    """Elastic slip magnitude after the step and its derivatives, per point."""
 
-    ``alpha = 2 sin phi / (sqrt3 (3 - sin phi))``, ``k = 6 c cos phi / (sqrt3 (3 - sin phi))``
-    for ``F = sqrt(J2) + alpha I1 - k`` with tension-positive ``I1``.
-    """
-    ph = math.radians(phi_deg)
-    den = math.sqrt(3.0) * (3.0 - math.sin(ph))
-    return 2.0 * math.sin(ph) / den, 6.0 * c * math.cos(ph) / den
+    r_tr: np.ndarray  #: magnitude of the trial elastic slip, m
+    e: np.ndarray  #: (n, 2) unit direction of the trial elastic slip (0 where it is 0)
+    pos: np.ndarray  #: bool, ``r_tr > 0``
+    r: np.ndarray  #: magnitude of the elastic slip after the return, m
+    dr_drtr: np.ndarray  #: dr / dr_tr, -
+    dr_dn: np.ndarray  #: dr / d opening at fixed trial slip, -
 
 
 @dataclass(frozen=True)
-class PileSoilInterface:
+class PileSoilInterface(DruckerPragerCone):
     """Elastic–viscoplastic pile–soil interface law (see the module docstring).
 
     Attributes:
@@ -113,47 +131,31 @@ class PileSoilInterface:
     viscous: bool = True
 
     def __post_init__(self) -> None:
-        inf = math.inf
-        check_param("K", self.K, "-", 0.0, inf, lo_open=True, hi_open=True)
-        check_param("n", self.n, "-", 0.0, inf, hi_open=True)
-        check_param("R_f", self.R_f, "-", 0.0, 1.0, hi_open=True)
-        check_param("c", self.c, "kPa", 0.0, inf, hi_open=True)
-        check_param("phi_deg", self.phi_deg, "deg", 0.0, 90.0, hi_open=True)
-        check_param("eta", self.eta, "kPa·day/m", 0.0, inf, lo_open=True, hi_open=True)
-        check_param("k_normal", self.k_normal, "kPa/m", 0.0, inf, lo_open=True, hi_open=True)
+        err = ConstitutiveError
+        require_positive("K", self.K, "-", error=err)
+        require_non_negative("n", self.n, "-", error=err)
+        require_in_range("R_f", self.R_f, 0.0, 1.0, "-", hi_open=True, error=err)
+        require_non_negative("c", self.c, "kPa", error=err)
+        require_in_range("phi_deg", self.phi_deg, 0.0, 90.0, "deg", hi_open=True, error=err)
+        require_positive("eta", self.eta, "kPa·day/m", error=err)
+        require_positive("k_normal", self.k_normal, "kPa/m", error=err)
         if self.delta_deg is not None:
-            check_param("delta_deg", self.delta_deg, "deg", 0.0, 90.0, lo_open=True,
-                        hi_open=True)
+            require_in_range("delta_deg", self.delta_deg, 0.0, 90.0, "deg", lo_open=True,
+                             hi_open=True, error=err)
         elif self.phi_deg <= 0.0:
             raise ConstitutiveError(
                 "delta_deg = None needs phi_deg > 0 deg for Eq. 17; give delta_deg in (0, 90) deg"
             )
-        check_param("N", self.N, "-", 0.0, inf, lo_open=True, hi_open=True)
-        check_param("r_w", self.r_w, "kN/m3", 0.0, inf, lo_open=True, hi_open=True)
-        check_param("P_a", self.P_a, "kPa", 0.0, inf, lo_open=True, hi_open=True)
-        check_param("p_floor", self.p_floor, "kPa", 0.0, inf, lo_open=True, hi_open=True)
-        if self.variant not in ("default", "seed"):
-            raise ConstitutiveError(
-                f"variant = {self.variant!r} is not allowed; allowed: 'default', 'seed'")
-        if self.integrator not in ("implicit", "explicit"):
-            raise ConstitutiveError(
-                f"integrator = {self.integrator!r} is not allowed; allowed: 'implicit', 'explicit'")
+        for key, unit in (("N", "-"), ("r_w", "kN/m3"), ("P_a", "kPa"), ("p_floor", "kPa")):
+            require_positive(key, getattr(self, key), unit, error=err)
+        require_one_of("variant", self.variant, ("default", "seed"), error=err)
+        require_one_of("integrator", self.integrator, ("implicit", "explicit"), error=err)
 
     # ------------------------------------------------------------------ derived parameters
     @cached_property
     def delta(self) -> float:
         """Interface friction angle, degrees (given, or Eq. 17)."""
         return float(self.delta_deg) if self.delta_deg is not None else delta_eq17(self.phi_deg)
-
-    @cached_property
-    def alpha(self) -> float:
-        """Drucker–Prager alpha of Eq. 13, -."""
-        return dp_outer_cone(self.c, self.phi_deg)[0]
-
-    @cached_property
-    def k(self) -> float:
-        """Drucker–Prager k of Eq. 13, kPa."""
-        return dp_outer_cone(self.c, self.phi_deg)[1]
 
     @cached_property
     def F0(self) -> float:
@@ -178,7 +180,7 @@ class PileSoilInterface:
         t = np.hypot(tr[:, 1], tr[:, 2])
         return self._F(t, tr[:, 0])[0]
 
-    def _F(self, t: np.ndarray, s: np.ndarray):
+    def _F(self, t: np.ndarray, s: np.ndarray) -> tuple[np.ndarray, ...]:
         """Return F, dF/dt, dF/ds, g = dF/dt, dg/dt, dg/ds (flow magnitude factor g)."""
         al, k = self.alpha, self.k
         if self.variant == "default":
@@ -268,85 +270,108 @@ class PileSoilInterface:
         if not dt >= 0.0:
             raise ConstitutiveError(f"dt = {dt!r} day must be >= 0")
         dj = as_points(d_jump, 3, "d_jump")
-        nq = dj.shape[0]
-        kn = self.k_normal
+        nc = self._normal(state_n["gap"][:, 0] + dj[:, 0])
+        ge_tr, slip_vp = self._trial_slip(dj, state_n, nc, dt)
+        sh = self._shear(ge_tr, nc, slip_vp, dt)
+        traction, tangent = self._traction_tangent(nc, sh)
+        state = {
+            "traction": traction,
+            "slip_e": sh.r[:, None] * sh.e,
+            "slip_vp": slip_vp,
+            "gap": nc.gap[:, None],
+            "detached": (~nc.contact).astype(float)[:, None],
+        }
+        return traction, state, tangent
 
-        gap = state_n["gap"][:, 0] + dj[:, 0]
+    def _normal(self, gap: np.ndarray) -> _Normal:
+        """Normal penalty response at the opening ``gap`` after the step, with derivatives."""
+        kn = self.k_normal
         contact = gap <= 0.0
         s = np.where(contact, kn * gap, 0.0)
         a, b = self.hyperbola(s)
         p = np.maximum(-s, self.p_floor)
-        # derivatives with respect to the normal jump increment
         s_n = np.where(contact, kn, 0.0)
         p_n = np.where(contact & (-s > self.p_floor), -kn, 0.0)
-        cmask = contact[:, None]
+        return _Normal(gap, contact, s, a, b, p, s_n, p_n)
 
+    def _trial_slip(
+        self, dj: np.ndarray, state_n: dict[str, np.ndarray], nc: _Normal, dt: float
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Trial elastic slip ``(n, 2)`` and the viscoplastic slip so far.
+
+        The elastic slip restarts from zero after a separation. The explicit integrator takes
+        the step's viscoplastic slip from the committed traction here; the implicit one leaves
+        it to :meth:`_shear`.
+        """
+        cmask = nc.contact[:, None]
         slip_e_n = np.where(state_n["detached"] > 0.5, 0.0, state_n["slip_e"])
         slip_vp = state_n["slip_vp"].copy()
+        if not (self.integrator == "explicit" and self.viscous):
+            return np.where(cmask, slip_e_n + dj[:, 1:], 0.0), slip_vp
+        tr_n = state_n["traction"]
+        t_old = np.hypot(tr_n[:, 1], tr_n[:, 2])
+        F_old, _, _, g_old, _, _ = self._F(t_old, tr_n[:, 0])
+        act = (state_n["detached"][:, 0] < 0.5) & (F_old > 0.0) & (t_old > 0.0) & (dt > 0)
+        dvp = np.zeros((dj.shape[0], 2))
+        if np.any(act):
+            phi, _ = self._rate(F_old[act], dt)
+            dvp[act] = (phi * g_old[act] / t_old[act])[:, None] * tr_n[act, 1:]
+        ge_tr = np.where(cmask, slip_e_n + dj[:, 1:] - dvp, 0.0)
+        return ge_tr, np.where(cmask, slip_vp + dvp, slip_vp)
 
-        if self.integrator == "explicit" and self.viscous:
-            tr_n = state_n["traction"]
-            t_old = np.hypot(tr_n[:, 1], tr_n[:, 2])
-            F_old, _, _, g_old, _, _ = self._F(t_old, tr_n[:, 0])
-            act = (state_n["detached"][:, 0] < 0.5) & (F_old > 0.0) & (t_old > 0.0) & (dt > 0)
-            dvp = np.zeros((nq, 2))
-            if np.any(act):
-                phi, _ = self._rate(F_old[act], dt)
-                dvp[act] = (phi * g_old[act] / t_old[act])[:, None] * tr_n[act, 1:]
-            ge_tr = np.where(cmask, slip_e_n + dj[:, 1:] - dvp, 0.0)
-            slip_vp = np.where(cmask, slip_vp + dvp, slip_vp)
-        else:
-            ge_tr = np.where(cmask, slip_e_n + dj[:, 1:], 0.0)
-
+    def _shear(self, ge_tr: np.ndarray, nc: _Normal, slip_vp: np.ndarray, dt: float) -> _Shear:
+        """Implicit radial return of the trial elastic slip; adds the return to ``slip_vp``."""
+        nq = ge_tr.shape[0]
         r_tr = np.hypot(ge_tr[:, 0], ge_tr[:, 1])
         pos = r_tr > 0.0
         e = np.where(pos[:, None], ge_tr / np.where(pos, r_tr, 1.0)[:, None], 0.0)
         r = r_tr.copy()
         dr_drtr = np.ones(nq)
         dr_dn = np.zeros(nq)
-
         if self.integrator == "implicit" and self.viscous and dt > 0.0:
+            a, b, s = nc.a, nc.b, nc.s
             t_tr = r_tr / (a + b * r_tr)
-            plastic = contact & pos & (self._F(t_tr, s)[0] > 0.0)
+            plastic = nc.contact & pos & (self._F(t_tr, s)[0] > 0.0)
             if np.any(plastic):
                 idx = np.nonzero(plastic)[0]
-                rr, Rr, Rn = self._return(r_tr[idx], a[idx], b[idx], s[idx], p[idx],
-                                          s_n[idx], p_n[idx], dt)
+                rr, Rr, Rn = self._return(r_tr[idx], a[idx], b[idx], s[idx], nc.p[idx],
+                                          nc.s_n[idx], nc.p_n[idx], dt)
                 r[idx] = rr
                 dr_drtr[idx] = 1.0 / Rr
                 dr_dn[idx] = -Rn / Rr
                 slip_vp[idx] += (r_tr[idx] - rr)[:, None] * e[idx]
+        return _Shear(r_tr, e, pos, r, dr_drtr, dr_dn)
 
-        den = a + b * r
+    def _traction_tangent(self, nc: _Normal, sh: _Shear) -> tuple[np.ndarray, np.ndarray]:
+        """Traction ``(n, 3)`` and consistent tangent ``(n, 3, 3)`` from the step's slip."""
+        a, p, contact, pos, e = nc.a, nc.p, nc.contact, sh.pos, sh.e
+        r = sh.r
+        den = a + nc.b * r
         t = r / den
         t_r = a / den**2
-        t_p = r * (self.n * a + b * r) / (p * den**2)
-        dt_dn = t_r * dr_dn + t_p * p_n
-        c_perp = np.where(pos, t / np.where(pos, r_tr, 1.0), 1.0 / a)
-        c_par = np.where(pos, t_r * dr_drtr, 1.0 / a)
+        t_p = r * (self.n * a + nc.b * r) / (p * den**2)
+        dt_dn = t_r * sh.dr_dn + t_p * nc.p_n
+        c_perp = np.where(pos, t / np.where(pos, sh.r_tr, 1.0), 1.0 / a)
+        c_par = np.where(pos, t_r * sh.dr_drtr, 1.0 / a)
         c_perp = np.where(contact, c_perp, 0.0)
         c_par = np.where(contact, c_par, 0.0)
 
+        nq = r.shape[0]
         traction = np.empty((nq, 3))
-        traction[:, 0] = s
+        traction[:, 0] = nc.s
         traction[:, 1:] = t[:, None] * e
         tangent = np.zeros((nq, 3, 3))
-        tangent[:, 0, 0] = s_n
+        tangent[:, 0, 0] = nc.s_n
         tangent[:, 1:, 0] = dt_dn[:, None] * e
         ee = e[:, :, None] * e[:, None, :]
         eye = np.eye(2)[None]
         tangent[:, 1:, 1:] = c_par[:, None, None] * ee + c_perp[:, None, None] * (eye - ee)
+        return traction, tangent
 
-        state = {
-            "traction": traction,
-            "slip_e": r[:, None] * e,
-            "slip_vp": slip_vp,
-            "gap": gap[:, None],
-            "detached": (~contact).astype(float)[:, None],
-        }
-        return traction, state, tangent
-
-    def _return(self, r_tr, a, b, s, p, s_n, p_n, dt):
+    def _return(
+        self, r_tr: np.ndarray, a: np.ndarray, b: np.ndarray, s: np.ndarray, p: np.ndarray,
+        s_n: np.ndarray, p_n: np.ndarray, dt: float,
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Backward-Euler radial return: solve ``R(r) = r - r_tr + phi(F) g = 0`` per point.
 
         Bracketed Newton on ``r`` in ``[0, r_tr]`` (R(0) < 0 < R(r_tr)); returns ``r``,

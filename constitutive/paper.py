@@ -1,13 +1,54 @@
-"""Table 1 of the source paper (Pier 667), as reference data for tests and benchmarks.
+"""The source paper's closed-form relations (Eqs. 13 and 17) and its Table 1 (Pier 667).
 
-The scenario in ``pilegroup.model`` is the source of truth for runs; this copy only feeds the
-constitutive tests and benchmarks. Units as in the paper's table: E in MPa, c in kPa, angles in
-degrees, eta in "MPa·d" (read as MPa·d/m, see docs/model.md), gamma in kN/m3.
+The formulas are pure math on scalars: the interface and soil laws use them (the laws with an
+Eq. 13 cone get ``alpha`` and ``k`` from :class:`DruckerPragerCone`), and so does the scenario
+model (``pilegroup.model`` derives a layer's interface friction angle from Eq. 17).
+
+Table 1 is reference data: the scenario in ``pilegroup.model`` is the source of truth for runs;
+this copy only feeds the constitutive tests and benchmarks. Units as in the paper's table: E in
+MPa, c in kPa, angles in degrees, eta in "MPa·d" (read as MPa·d/m, see docs/model.md), gamma in
+kN/m3.
 """
 
 from __future__ import annotations
 
 import math
+from functools import cached_property
+
+
+def delta_eq17(phi_deg: float) -> float:
+    """Interface friction angle of Eq. 17, degrees: ``atan(sin phi cos phi / (1 + sin^2 phi))``."""
+    ph = math.radians(phi_deg)
+    return math.degrees(math.atan(math.sin(ph) * math.cos(ph) / (1.0 + math.sin(ph) ** 2)))
+
+
+def dp_outer_cone(c: float, phi_deg: float) -> tuple[float, float]:
+    """Drucker–Prager ``(alpha, k)`` of Eq. 13 (outer cone, compression meridian), k in kPa.
+
+    ``alpha = 2 sin phi / (sqrt3 (3 - sin phi))``, ``k = 6 c cos phi / (sqrt3 (3 - sin phi))``
+    for ``F = sqrt(J2) + alpha I1 - k`` with tension-positive ``I1``.
+    """
+    ph = math.radians(phi_deg)
+    den = math.sqrt(3.0) * (3.0 - math.sin(ph))
+    return 2.0 * math.sin(ph) / den, 6.0 * c * math.cos(ph) / den
+
+
+class DruckerPragerCone:
+    """Mixin of the laws that use the Eq. 13 cone of their strength ``c`` (kPa), ``phi_deg``."""
+
+    c: float
+    phi_deg: float
+
+    @cached_property
+    def alpha(self) -> float:
+        """Drucker–Prager alpha of Eq. 13, -."""
+        return dp_outer_cone(self.c, self.phi_deg)[0]
+
+    @cached_property
+    def k(self) -> float:
+        """Drucker–Prager k of Eq. 13, kPa."""
+        return dp_outer_cone(self.c, self.phi_deg)[1]
+
 
 # layer: (H m, gamma kN/m3, E MPa, nu, phi deg, c kPa, e0, delta deg, K, n, R_f, eta MPa·d/m)
 TABLE1: dict[int, dict[str, float | str | None]] = {}

@@ -16,14 +16,23 @@ import numpy as np
 from pilegroup.constitutive.base import (
     MANDEL_I,
     SQRT2,
-    ConstitutiveError,
     as_points,
     broadcast_state,
-    check_param,
     mandel_to_tensor,
 )
+from pilegroup.constitutive.paper import DruckerPragerCone, dp_outer_cone
+from pilegroup.errors import ConstitutiveError
+from pilegroup.validate import (
+    ErrorClass,
+    require_in_range,
+    require_non_negative,
+    require_positive,
+)
 
-__all__ = ["DruckerPrager", "LinearElastic", "MohrCoulomb", "elastic_matrix", "principal_stresses"]
+__all__ = [
+    "DruckerPrager", "LinearElastic", "MohrCoulomb", "elastic_matrix", "principal_stresses",
+    "require_elastic_constants",
+]
 
 #: codes of the ``"mode"`` state component (which branch of the return mapping was taken)
 MODE_ELASTIC, MODE_FACE, MODE_EDGE_A, MODE_EDGE_B, MODE_APEX = 0, 1, 2, 3, 4
@@ -40,13 +49,54 @@ def elastic_matrix(E: float, nu: float) -> np.ndarray:
     return lam * np.outer(MANDEL_I, MANDEL_I) + 2.0 * G * np.eye(6)
 
 
-def _check_elastic(E: float, nu: float) -> None:
-    check_param("E", E, "kPa", 0.0, np.inf, lo_open=True, hi_open=True)
-    check_param("nu", nu, "-", -1.0, 0.5, lo_open=True, hi_open=True)
+def require_elastic_constants(E: float, nu: float, *,
+                              error: ErrorClass = ConstitutiveError) -> None:
+    """Raise ``error`` unless ``E`` (kPa) > 0 and ``-1 < nu < 0.5`` (isotropic elasticity)."""
+    require_positive("E", E, "kPa", error=error)
+    require_in_range("nu", nu, -1.0, 0.5, "-", lo_open=True, hi_open=True, error=error)
 
 
 @dataclass(frozen=True)
-class LinearElastic:
+class _Elastic:
+    """Isotropic elasticity shared by the soil laws: parameters, checks, elastic predictor."""
+
+    E: float
+    nu: float
+
+    def __post_init__(self) -> None:
+        require_elastic_constants(self.E, self.nu)
+
+    @property
+    def C(self) -> np.ndarray:
+        """Elasticity matrix, Mandel 6x6, kPa."""
+        return elastic_matrix(self.E, self.nu)
+
+    def update(
+        self, d_strain: np.ndarray, state_n: dict[str, np.ndarray], dt: float = 0.0
+    ) -> tuple[np.ndarray, dict[str, np.ndarray], np.ndarray]:
+        """Elastic predictor ``sigma_tr = sigma_n + C : d_eps``, then the law's correction.
+
+        Args:
+            d_strain: (n, 6) Mandel strain increment, tension positive.
+            state_n: committed state (not mutated).
+            dt: time step, day (ignored: the soil laws are rate independent).
+
+        Returns:
+            ``(stress, state_trial, tangent)``: stress (n, 6) kPa; the trial state; tangent
+            (n, 6, 6) kPa, ``d stress / d d_strain`` (the class docstring says which).
+        """
+        de = as_points(d_strain, 6, "d_strain")
+        C = self.C
+        return self._correct(state_n["stress"] + de @ C, state_n, C)  # C symmetric
+
+    def _correct(
+        self, sig_tr: np.ndarray, state_n: dict[str, np.ndarray], C: np.ndarray
+    ) -> tuple[np.ndarray, dict[str, np.ndarray], np.ndarray]:
+        raise NotImplementedError
+
+
+@dataclass(frozen=True)
+class LinearElastic(_Elastic):
     """Isotropic linear elasticity (no plastic work at all).
 
     Attributes:
@@ -55,20 +105,10 @@ class LinearElastic:
 
     State: ``{"stress": (n, 6)}`` (Mandel, kPa, tension positive).
 
-    ``update`` returns the tangent as a **read-only broadcast view** of one 6x6 matrix,
-    shape ``(n, 6, 6)`` (no per-point memory); copy it (``np.array(tangent)``) before writing.
+    ``update`` (``sigma = sigma_n + C : d_eps``) returns the tangent as a **read-only broadcast
+    view** of the constant elastic matrix, shape ``(n, 6, 6)`` (no per-point memory); copy it
+    (``np.array(tangent)``) before writing.
     """
-
-    E: float
-    nu: float
-
-    def __post_init__(self) -> None:
-        _check_elastic(self.E, self.nu)
-
-    @property
-    def C(self) -> np.ndarray:
-        """Elasticity matrix, Mandel 6x6, kPa."""
-        return elastic_matrix(self.E, self.nu)
 
     def state_layout(self) -> dict[str, int]:
         """State name -> components per point."""
@@ -78,25 +118,11 @@ class LinearElastic:
         """Initial state of ``n`` points; ``stress0`` (kPa, Mandel, ``(6,)`` or ``(n, 6)``)."""
         return {"stress": broadcast_state(n, stress0, 6, "stress0")}
 
-    def update(
-        self, d_strain: np.ndarray, state_n: dict[str, np.ndarray], dt: float = 0.0
+    def _correct(
+        self, sig_tr: np.ndarray, state_n: dict[str, np.ndarray], C: np.ndarray
     ) -> tuple[np.ndarray, dict[str, np.ndarray], np.ndarray]:
-        """Stress update ``sigma = sigma_n + C : d_eps``.
-
-        Args:
-            d_strain: (n, 6) Mandel strain increment, tension positive.
-            state_n: committed state (not mutated).
-            dt: time step, day (ignored).
-
-        Returns:
-            ``(stress, state_trial, tangent)``: stress (n, 6) kPa; ``{"stress": stress}``;
-            tangent (n, 6, 6) kPa, a read-only broadcast view of the constant elastic matrix.
-        """
-        de = as_points(d_strain, 6, "d_strain")
-        C = self.C
-        stress = state_n["stress"] + de @ C  # C symmetric
-        tangent = np.broadcast_to(C, (de.shape[0], 6, 6))
-        return stress, {"stress": stress}, tangent
+        tangent = np.broadcast_to(C, (sig_tr.shape[0], 6, 6))
+        return sig_tr, {"stress": sig_tr}, tangent
 
 
 def principal_stresses(sig: np.ndarray) -> np.ndarray:
@@ -152,25 +178,28 @@ def _spectral_basis(V: np.ndarray) -> np.ndarray:
     return R
 
 
-def _check_strength(c: float, phi_deg: float, psi_deg: float) -> None:
-    check_param("c", c, "kPa", 0.0, np.inf, hi_open=True)
-    check_param("phi_deg", phi_deg, "deg", 0.0, 90.0, hi_open=True)
-    check_param("psi_deg", psi_deg, "deg", 0.0, phi_deg)
-    if c == 0.0 and phi_deg == 0.0:
-        raise ConstitutiveError("c = 0 kPa and phi_deg = 0 deg give no strength; "
-                                "allowed: c > 0 kPa or phi_deg > 0 deg")
+@dataclass(frozen=True)
+class _ElastoPlastic(_Elastic):
+    """Strength parameters and state handling of the perfectly plastic soil laws (Mandel).
 
+    ``update`` returns the stress on or inside the yield surface and the consistent
+    (algorithmic) tangent, not symmetric when psi != phi.
+    """
 
-class _ElastoPlastic:
-    """Shared state handling of the perfectly plastic soil laws (Mandel notation)."""
+    c: float
+    phi_deg: float
+    psi_deg: float = 0.0
 
-    E: float
-    nu: float
-
-    @property
-    def C(self) -> np.ndarray:
-        """Elasticity matrix, Mandel 6x6, kPa."""
-        return elastic_matrix(self.E, self.nu)
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        require_non_negative("c", self.c, "kPa", error=ConstitutiveError)
+        require_in_range("phi_deg", self.phi_deg, 0.0, 90.0, "deg", hi_open=True,
+                         error=ConstitutiveError)
+        require_in_range("psi_deg", self.psi_deg, 0.0, self.phi_deg, "deg",
+                         error=ConstitutiveError)
+        if self.c == 0.0 and self.phi_deg == 0.0:
+            raise ConstitutiveError("c = 0 kPa and phi_deg = 0 deg give no strength; "
+                                    "allowed: c > 0 kPa or phi_deg > 0 deg")
 
     @property
     def K(self) -> float:
@@ -200,26 +229,12 @@ class _ElastoPlastic:
         return {"stress": broadcast_state(n, stress0, 6, "stress0"), "eps_p": np.zeros((n, 6)),
                 "mode": np.zeros((n, 1))}
 
-    def update(
-        self, d_strain: np.ndarray, state_n: dict[str, np.ndarray], dt: float = 0.0
+    def _correct(
+        self, sig_tr: np.ndarray, state_n: dict[str, np.ndarray], C: np.ndarray
     ) -> tuple[np.ndarray, dict[str, np.ndarray], np.ndarray]:
-        """Elastic predictor, return mapping, consistent tangent (rate independent).
-
-        Args:
-            d_strain: (n, 6) Mandel strain increment, tension positive.
-            state_n: committed state (not mutated).
-            dt: time step, day (ignored).
-
-        Returns:
-            ``(stress, state_trial, tangent)``: stress (n, 6) kPa on or inside the yield
-            surface; trial state; tangent (n, 6, 6) kPa, the consistent (algorithmic) tangent
-            ``d stress / d d_strain`` (not symmetric when psi != phi).
-        """
-        de = as_points(d_strain, 6, "d_strain")
-        C = self.C
-        sig_tr = state_n["stress"] + de @ C
+        """Return mapping of the plastic points and their consistent tangent."""
         stress = sig_tr.copy()
-        n = de.shape[0]
+        n = sig_tr.shape[0]
         tangent = np.empty((n, 6, 6))
         tangent[:] = C
         eps_p = state_n["eps_p"].copy()
@@ -233,6 +248,12 @@ class _ElastoPlastic:
             mode[idx, 0] = md
             eps_p[idx] += (sig_tr[idx] - s_new) @ np.linalg.inv(C)
         return stress, {"stress": stress, "eps_p": eps_p, "mode": mode}, tangent
+
+    def _trial_plastic(self, sig_tr: np.ndarray) -> np.ndarray:
+        raise NotImplementedError
+
+    def _return(self, sig_tr: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        raise NotImplementedError
 
 
 @dataclass(frozen=True)
@@ -257,16 +278,6 @@ class MohrCoulomb(_ElastoPlastic):
 
     State: see :meth:`state_layout`.
     """
-
-    E: float
-    nu: float
-    c: float
-    phi_deg: float
-    psi_deg: float = 0.0
-
-    def __post_init__(self) -> None:
-        _check_elastic(self.E, self.nu)
-        _check_strength(self.c, self.phi_deg, self.psi_deg)
 
     def _f_principal(self, s: np.ndarray) -> np.ndarray:
         sf, cf = math.sin(math.radians(self.phi_deg)), math.cos(math.radians(self.phi_deg))
@@ -312,7 +323,7 @@ class MohrCoulomb(_ElastoPlastic):
         plastic[idx] = f > 1e-12 * sck
         return plastic
 
-    def _return(self, sig_tr: np.ndarray):
+    def _return(self, sig_tr: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Return mapping of trial stresses known to be outside the surface."""
         m = sig_tr.shape[0]
         w, V = np.linalg.eigh(mandel_to_tensor(sig_tr))
@@ -393,7 +404,7 @@ class MohrCoulomb(_ElastoPlastic):
 
 
 @dataclass(frozen=True)
-class DruckerPrager(_ElastoPlastic):
+class DruckerPrager(_ElastoPlastic, DruckerPragerCone):
     """Linear elastic–perfectly plastic Drucker–Prager matched to Mohr–Coulomb by Eq. 13.
 
     ``F = sqrt(J2) + alpha I1 - k`` (tension-positive I1), outer cone (coincides with MC on the
@@ -402,38 +413,9 @@ class DruckerPrager(_ElastoPlastic):
     alpha_psi from psi by the same formula. Cone return closed form; apex ``I1 = k / alpha``
     (tension cut-off-like projection for psi < phi, as for MohrCoulomb).
 
-    Attributes:
-        E: Young's modulus, kPa (> 0).
-        nu: Poisson's ratio, - (in (-1, 0.5)).
-        c: cohesion, kPa (>= 0).
-        phi_deg: friction angle, degrees (in [0, 90)).
-        psi_deg: dilatancy angle, degrees (in [0, phi_deg]); default 0.
+    Attributes and state: as :class:`MohrCoulomb`; ``alpha`` and ``k`` are the cone's Eq. 13
+    constants.
     """
-
-    E: float
-    nu: float
-    c: float
-    phi_deg: float
-    psi_deg: float = 0.0
-
-    def __post_init__(self) -> None:
-        _check_elastic(self.E, self.nu)
-        _check_strength(self.c, self.phi_deg, self.psi_deg)
-
-    def _ak(self, angle_deg: float) -> tuple[float, float]:
-        sa, ca = math.sin(math.radians(angle_deg)), math.cos(math.radians(angle_deg))
-        den = math.sqrt(3.0) * (3.0 - sa)
-        return 2.0 * sa / den, 6.0 * self.c * ca / den
-
-    @property
-    def alpha(self) -> float:
-        """Eq. 13 alpha, -."""
-        return self._ak(self.phi_deg)[0]
-
-    @property
-    def k(self) -> float:
-        """Eq. 13 k, kPa."""
-        return self._ak(self.phi_deg)[1]
 
     def yield_function(self, stress: np.ndarray) -> np.ndarray:
         """Drucker–Prager F (kPa) of Mandel stresses ``(n, 6)``; F <= 0 is admissible."""
@@ -446,11 +428,11 @@ class DruckerPrager(_ElastoPlastic):
         f = self.yield_function(sig_tr)
         return f > 1e-12 * (np.abs(sig_tr).max(axis=1) + self.c)
 
-    def _return(self, sig_tr: np.ndarray):
+    def _return(self, sig_tr: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         m = sig_tr.shape[0]
         K, G = self.K, self.G
         al, k = self.alpha, self.k
-        ab = self._ak(self.psi_deg)[0]
+        ab = dp_outer_cone(self.c, self.psi_deg)[0]
         I1 = sig_tr[:, :3].sum(axis=1)
         dev = sig_tr - (I1 / 3.0)[:, None] * MANDEL_I
         nrm = np.sqrt(np.einsum("ij,ij->i", dev, dev))  # = sqrt(2 J2)

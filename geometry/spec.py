@@ -18,9 +18,10 @@ import math
 from dataclasses import asdict, dataclass, field, replace
 from typing import Any
 
-from pilegroup.model.errors import (
-    ScenarioError,
+from pilegroup.errors import ScenarioError
+from pilegroup.validate import (
     require_finite,
+    require_in_range,
     require_non_negative,
     require_positive,
 )
@@ -54,18 +55,6 @@ PIER667_LAYERS: tuple[tuple[str, float | None], ...] = (
 _REL = 1e-9  # relative tolerance for geometric coincidence checks
 
 
-def _finite(key: str, value: float, unit: str = "m") -> None:
-    require_finite(key, value, unit)
-
-
-def _positive(key: str, value: float, unit: str = "m") -> None:
-    require_positive(key, value, unit)
-
-
-def _non_negative(key: str, value: float, unit: str = "m") -> None:
-    require_non_negative(key, value, unit)
-
-
 @dataclass(frozen=True)
 class BlockSpec:
     """The soil block: ``size_x`` x ``size_y`` in plan (m, centred at x = y = 0), ``depth`` (m)."""
@@ -75,9 +64,9 @@ class BlockSpec:
     depth: float
 
     def __post_init__(self) -> None:
-        _positive("block.size_x", self.size_x)
-        _positive("block.size_y", self.size_y)
-        _positive("block.depth", self.depth)
+        require_positive("block.size_x", self.size_x, "m")
+        require_positive("block.size_y", self.size_y, "m")
+        require_positive("block.depth", self.depth, "m")
 
 
 @dataclass(frozen=True)
@@ -98,9 +87,9 @@ class LayerSpec:
         if not isinstance(self.name, str) or not self.name.strip():
             raise ScenarioError("layer.name", self.name, "must be a non-empty string")
         if self.thickness is not None:
-            _positive(f"layer[{self.name}].thickness", self.thickness)
+            require_positive(f"layer[{self.name}].thickness", self.thickness, "m")
         if self.dz_max is not None:
-            _positive(f"layer[{self.name}].dz_max", self.dz_max)
+            require_positive(f"layer[{self.name}].dz_max", self.dz_max, "m")
 
 
 @dataclass(frozen=True)
@@ -117,11 +106,11 @@ class PileSpec:
     embedment: float = 0.0
 
     def __post_init__(self) -> None:
-        _finite("pile.x", self.x)
-        _finite("pile.y", self.y)
-        _positive("pile.diameter", self.diameter)
-        _positive("pile.length_in_soil", self.length_in_soil)
-        _non_negative("pile.embedment", self.embedment)
+        require_finite("pile.x", self.x, "m")
+        require_finite("pile.y", self.y, "m")
+        require_positive("pile.diameter", self.diameter, "m")
+        require_positive("pile.length_in_soil", self.length_in_soil, "m")
+        require_non_negative("pile.embedment", self.embedment, "m")
 
     @property
     def radius(self) -> float:
@@ -141,14 +130,14 @@ class CapSpec:
 
     def __post_init__(self) -> None:
         for key in ("x_min", "x_max", "y_min", "y_max"):
-            _finite(f"cap.{key}", getattr(self, key))
+            require_finite(f"cap.{key}", getattr(self, key), "m")
         if self.x_max <= self.x_min:
             raise ScenarioError("cap.x_max", self.x_max, f"must be > cap.x_min = {self.x_min:g}",
                                 "m")
         if self.y_max <= self.y_min:
             raise ScenarioError("cap.y_max", self.y_max, f"must be > cap.y_min = {self.y_min:g}",
                                 "m")
-        _positive("cap.thickness", self.thickness)
+        require_positive("cap.thickness", self.thickness, "m")
 
     @classmethod
     def centred(cls, size_x: float, size_y: float, thickness: float) -> CapSpec:
@@ -196,15 +185,12 @@ class MeshSizing:
     def __post_init__(self) -> None:
         for key in ("h_pile", "near_field_margin", "h_far", "dz_surface", "dz_toe", "dz_max",
                     "dz_max_deep", "dz_cap"):
-            _positive(f"sizing.{key}", getattr(self, key))
+            require_positive(f"sizing.{key}", getattr(self, key), "m")
         if self.h_far < self.h_pile:
             raise ScenarioError("sizing.h_far", self.h_far,
                                 f"must be >= sizing.h_pile = {self.h_pile:g}", "m")
         for key in ("growth", "dz_growth"):
-            v = getattr(self, key)
-            _finite(f"sizing.{key}", v, "-")
-            if not 1.0 < v <= 2.0:
-                raise ScenarioError(f"sizing.{key}", v, "must be in (1, 2]", "-")
+            require_in_range(f"sizing.{key}", getattr(self, key), 1.0, 2.0, "-", lo_open=True)
         if (not isinstance(self.n_circ_min, int) or self.n_circ_min < 8
                 or self.n_circ_min % 4 != 0):
             raise ScenarioError("sizing.n_circ_min", self.n_circ_min,

@@ -1,28 +1,25 @@
 """pilegroup.model: the scenario — typed, validated input data, TOML loading, units.
 
-Imports neither dolfinx nor gmsh.
+Imports neither dolfinx nor gmsh; from ``pilegroup.constitutive`` only the pure formula of
+Eq. 17 (:mod:`pilegroup.constitutive.paper`). The error classes are defined in
+:mod:`pilegroup.errors`; the ones users of the model meet are re-exported here.
 """
 
-from pilegroup.model.errors import ConvergenceError, PilegroupError, ScenarioError
-from pilegroup.model.loader import BUNDLED, bundled_text, load_scenario, scenario_from_dict
-from pilegroup.model.scenario import (
-    Cap,
+from pilegroup.errors import ConvergenceError, PilegroupError, ScenarioError
+from pilegroup.model.analysis import (
     InterfaceOptions,
-    InterfaceParams,
-    Layer,
     LinearSolver,
     MeshOptions,
     Numerics,
     Outputs,
-    Piles,
-    Scenario,
-    Site,
     Soil,
     Stage,
-    Structure,
     Time,
     TimeStepping,
 )
+from pilegroup.model.loader import BUNDLED, bundled_text, load_scenario, scenario_from_dict
+from pilegroup.model.scenario import Scenario
+from pilegroup.model.site import Cap, InterfaceParams, Layer, Piles, Site, Structure
 
 __all__ = [
     "BUNDLED", "Cap", "ConvergenceError", "InterfaceOptions", "InterfaceParams", "Layer",

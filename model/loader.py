@@ -14,12 +14,11 @@ from importlib import resources
 from pathlib import Path
 from typing import Any, Literal, Union, get_args, get_origin, get_type_hints
 
-from pilegroup.model.errors import ScenarioError
+from pilegroup.errors import ScenarioError
 from pilegroup.model.scenario import Scenario
 
 #: Scenarios shipped with the package (``pilegroup scenario show NAME``).
 BUNDLED = ("pier667", "single_pile")
-
 
 
 def _type_name(tp: Any) -> str:
@@ -99,7 +98,7 @@ def _convert(value: Any, tp: Any, key: str) -> Any:  # noqa: C901 - one branch p
     raise TypeError(f"unsupported field type {tp!r} at {key}")  # a programming error
 
 
-def build_dataclass(cls: type, data: Any, key: str = "") -> Any:
+def build_dataclass[T](cls: type[T], data: object, key: str = "") -> T:
     """Build the frozen dataclass ``cls`` from a TOML table, validating every key."""
     if not isinstance(data, dict):
         raise ScenarioError(key or cls.__name__, data, "must be a table")

@@ -10,7 +10,7 @@ SECONDS_PER_DAY = 86400.0
 #: Unit weight of water for Darcy flow and hydrostatics (kN/m^3). (The paper's r_w = 10 kN/m^3
 #: of the Clough-Duncan hyperbola is a parameter of the interface law, not this constant.)
 GAMMA_WATER = 9.81
-#: Bulk modulus of pore water (kPa), design.md section 4.
+#: Bulk modulus of pore water (kPa).
 K_WATER = 2.2e6
 #: Standard gravity (m/s^2) to turn densities (kg/m^3) into unit weights (kN/m^3).
 G = 9.81

@@ -11,19 +11,14 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
+from pilegroup.constitutive.soil import require_elastic_constants
+from pilegroup.errors import SolverInputError
 from pilegroup.model.units import GAMMA_WATER, K_WATER
-from pilegroup.solver.errors import SolverInputError
+from pilegroup.validate import require_in_range, require_non_negative, require_positive
 
 #: Unit weight of water, kN/m^3 (model.units). Darcy's law is written ``q = -(k / GAMMA_W) grad p``
 #: with the hydraulic conductivity ``k`` in m/day, so ``k / GAMMA_W`` is in m^2/(kPa day).
 GAMMA_W = GAMMA_WATER
-
-
-def _positive(name: str, value: float, unit: str, allow_zero: bool = False) -> None:
-    ok = math.isfinite(value) and (value >= 0 if allow_zero else value > 0)
-    if not ok:
-        rel = ">= 0" if allow_zero else "> 0"
-        raise SolverInputError(f"{name} = {value!r} {unit}; allowed: finite and {rel}")
 
 
 @dataclass(frozen=True)
@@ -50,13 +45,13 @@ class SoilMaterial:
     K_w: float = K_WATER
 
     def __post_init__(self) -> None:
-        _positive("k_m_per_day", self.k_m_per_day, "m/day", allow_zero=True)
-        if not (0.0 <= self.porosity < 1.0):
-            raise SolverInputError(f"porosity = {self.porosity!r} -; allowed: [0, 1)")
-        _positive("gamma_sat", self.gamma_sat, "kN/m^3", allow_zero=True)
-        _positive("K_w", self.K_w, "kPa")
+        err = SolverInputError
+        require_non_negative("k_m_per_day", self.k_m_per_day, "m/day", error=err)
+        require_in_range("porosity", self.porosity, 0.0, 1.0, "-", hi_open=True, error=err)
+        require_non_negative("gamma_sat", self.gamma_sat, "kN/m^3", error=err)
+        require_positive("K_w", self.K_w, "kPa", error=err)
         if self.K0 is not None:
-            _positive("K0", self.K0, "-")
+            require_positive("K0", self.K0, "-", error=err)
         if not hasattr(self.law, "update") or not hasattr(self.law, "initial_state"):
             raise SolverInputError(f"law = {self.law!r} does not follow the constitutive protocol")
 
@@ -104,9 +99,7 @@ class ElasticSolid:
     nu: float
 
     def __post_init__(self) -> None:
-        _positive("E", self.E, "kPa")
-        if not -1.0 < self.nu < 0.5:
-            raise SolverInputError(f"nu = {self.nu!r} -; allowed: (-1, 0.5)")
+        require_elastic_constants(self.E, self.nu, error=SolverInputError)
 
     @property
     def law(self) -> Any:
@@ -170,7 +163,7 @@ class Discretisation:
     def __post_init__(self) -> None:
         if self.pair not in ("Q2Q1", "Q1Q1"):
             raise SolverInputError(f"pair = {self.pair!r}; allowed: 'Q2Q1', 'Q1Q1'")
-        _positive("stab_factor", self.stab_factor, "-", allow_zero=True)
+        require_non_negative("stab_factor", self.stab_factor, "-", error=SolverInputError)
 
     @property
     def u_degree(self) -> int:
@@ -255,14 +248,14 @@ class TimeStepping:
     milestones: tuple[float, ...] = ()
 
     def __post_init__(self) -> None:
-        _positive("dt0", self.dt0, "day")
-        _positive("dt_min", self.dt_min, "day")
+        require_positive("dt0", self.dt0, "day", error=SolverInputError)
+        require_positive("dt_min", self.dt_min, "day", error=SolverInputError)
         if not self.dt_max >= self.dt0:
             raise SolverInputError(f"dt_max = {self.dt_max} day must be >= dt0 = {self.dt0}")
         if not self.grow >= 1.0:
             raise SolverInputError(f"grow = {self.grow}; allowed: >= 1")
-        if not 0.0 < self.cut < 1.0:
-            raise SolverInputError(f"cut = {self.cut}; allowed: (0, 1)")
+        require_in_range("cut", self.cut, 0.0, 1.0, "-", lo_open=True, hi_open=True,
+                         error=SolverInputError)
 
 
 @dataclass(frozen=True)
@@ -345,7 +338,8 @@ class Stage:
     def __post_init__(self) -> None:
         if self.kind not in ("geostatic", "load", "consolidation"):
             raise SolverInputError(f"stage {self.name!r}: kind = {self.kind!r}")
-        _positive(f"stage {self.name!r} duration", self.duration, "day", allow_zero=True)
+        require_non_negative(f"stage {self.name!r} duration", self.duration, "day",
+                             error=SolverInputError)
 
 
 #: Signature of an initial-stress provider: (points (n,3) m, material) -> (n,6) Mandel kPa.

@@ -3,13 +3,9 @@
 import numpy as np
 import pytest
 
-from pilegroup.constitutive.base import (
-    ConstitutiveError,
-    ConstitutiveLaw,
-    mandel_to_tensor,
-    tensor_to_mandel,
-)
+from pilegroup.constitutive.base import ConstitutiveLaw, mandel_to_tensor, tensor_to_mandel
 from pilegroup.constitutive.soil import LinearElastic
+from pilegroup.errors import ConstitutiveError
 
 
 def test_protocol_and_uniaxial():

@@ -16,9 +16,9 @@ import math
 import numpy as np
 import pytest
 
-from pilegroup.constitutive.base import ConstitutiveError
-from pilegroup.constitutive.interface import PileSoilInterface, delta_eq17, dp_outer_cone
-from pilegroup.constitutive.paper import TABLE1, interface_kwargs
+from pilegroup.constitutive.interface import PileSoilInterface
+from pilegroup.constitutive.paper import TABLE1, delta_eq17, dp_outer_cone, interface_kwargs
+from pilegroup.errors import ConstitutiveError
 
 SIG_N = -66.0  # kPa, ~ in-situ horizontal effective stress at 10 m depth in layer 2
 
@@ -52,7 +52,7 @@ def test_eq13_eq17_table1():
 
 @pytest.mark.parametrize("integrator", ["implicit", "explicit"])
 def test_hyperbola_eq5_monotonic_below_yield(integrator):
-    """Eq. 5 to 1e-4 relative (issue 4), small increments, below the yield surface."""
+    """Eq. 5 to 1e-4 relative, small increments, below the yield surface."""
     law = law2(integrator=integrator)
     a, b = ab_paper(law, SIG_N)
     tau_y = law.k - 3 * law.alpha * SIG_N  # default variant yield shear at SIG_N

@@ -15,7 +15,7 @@ import pytest
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
-from pilegroup.constitutive.base import ConstitutiveError, mandel_to_tensor, tensor_to_mandel
+from pilegroup.constitutive.base import mandel_to_tensor, tensor_to_mandel
 from pilegroup.constitutive.paper import soil_kwargs
 from pilegroup.constitutive.soil import (
     MODE_APEX,
@@ -26,6 +26,7 @@ from pilegroup.constitutive.soil import (
     MohrCoulomb,
     principal_stresses,
 )
+from pilegroup.errors import ConstitutiveError
 
 LAYERS = [2, 5, 8]  # mud (phi 2.6), silt (phi 25), gravel (c = 0, phi 35)
 
@@ -61,7 +62,7 @@ def triaxial(law, p0, n_steps=60, eps_max_factor=4.0):
 @pytest.mark.parametrize("layer", LAYERS)
 @pytest.mark.parametrize("Law", [MohrCoulomb, DruckerPrager])
 def test_triaxial_failure_deviator(Law, layer):
-    """Reaches the closed-form MC failure deviator to 1e-8 relative (issue 4)."""
+    """Reaches the closed-form MC failure deviator to 1e-8 relative."""
     law = Law(**soil_kwargs(layer))
     for p0 in (50.0, 200.0):
         q, qf, state, its = triaxial(law, p0)

@@ -5,6 +5,7 @@ import math
 import numpy as np
 import pytest
 
+from pilegroup.errors import ScenarioError
 from pilegroup.geometry.spec import (
     BlockSpec,
     CapSpec,
@@ -16,7 +17,6 @@ from pilegroup.geometry.spec import (
     single_pile,
 )
 from pilegroup.geometry.vertical import vertical_segments
-from pilegroup.model.errors import ScenarioError
 
 
 def test_pier667_default_dimensions():

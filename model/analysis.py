@@ -1,0 +1,229 @@
+"""How the analysis is run: modelling options, stages, time, mesh, numerics, outputs.
+
+Field names are the TOML keys (with their unit where they have one, e.g. ``duration_day``).
+Validation happens when a dataclass is built (:mod:`pilegroup.validate`); errors are
+:class:`~pilegroup.errors.ScenarioError` naming the key, value, unit and what is allowed.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Literal
+
+from pilegroup.errors import ScenarioError
+from pilegroup.validate import require_in_range, require_non_negative, require_positive
+
+
+@dataclass(frozen=True)
+class Soil:
+    """Which constitutive law the soil layers use."""
+
+    model: Literal["mohr_coulomb", "drucker_prager", "linear_elastic"] = "mohr_coulomb"
+
+
+@dataclass(frozen=True)
+class InterfaceOptions:
+    """How the pile-soil interface is modelled.
+
+    ``mode``: ``tied`` (piles share nodes with the soil, no interface law), ``elastic``
+    (hyperbolic springs only) or ``viscoplastic`` (the paper's full law). ``variant``: ``default``
+    (our consistent reading) or ``seed`` (the paper's literal equations), see docs/model.md.
+    The normal penalty stiffness is ``normal_stiffness_factor`` x E_layer / mesh size (kPa/m).
+    ``quadrature``: where the law is evaluated and its state lives, ``nodal`` (the interface
+    nodes) or ``gauss`` (2 x 2 Gauss points per facet, Q1Q1 only); docs/solver.md compares them.
+    """
+
+    mode: Literal["tied", "elastic", "viscoplastic"] = "viscoplastic"
+    variant: Literal["default", "seed"] = "default"
+    integrator: Literal["implicit", "explicit"] = "implicit"
+    N: float = 1.0
+    normal_stiffness_factor: float = 100.0
+    base: bool = True
+    quadrature: Literal["nodal", "gauss"] = "nodal"
+
+    def __post_init__(self) -> None:
+        require_positive("N", self.N, "-")
+        require_positive("normal_stiffness_factor", self.normal_stiffness_factor, "-")
+
+
+@dataclass(frozen=True)
+class Stage:
+    """One analysis stage.
+
+    ``kind``: ``geostatic`` (in-situ stresses, no time), ``load`` (ramps the cap load to
+    ``cap_load_kN`` over ``duration_day``, drained top, consolidating meanwhile), ``consolidation``
+    (constant load until ``until_day``, or until ``time.end_day`` when omitted).
+    """
+
+    name: str
+    kind: Literal["geostatic", "load", "consolidation"]
+    cap_load_kN: float | None = None
+    duration_day: float | None = None
+    until_day: float | None = None
+
+    def __post_init__(self) -> None:
+        if self.kind == "load":
+            if self.cap_load_kN is None:
+                raise ScenarioError("cap_load_kN", None, "missing: required for a load stage", "kN")
+            require_non_negative("cap_load_kN", self.cap_load_kN, "kN")
+            if self.duration_day is None:
+                raise ScenarioError("duration_day", None, "missing: required for a load stage",
+                                    "day")
+            require_positive("duration_day", self.duration_day, "day")
+        else:
+            for key in ("cap_load_kN", "duration_day"):
+                if getattr(self, key) is not None:
+                    raise ScenarioError(key, getattr(self, key),
+                                        f"not allowed for a {self.kind} stage (only for load)")
+        if self.until_day is not None:
+            if self.kind != "consolidation":
+                raise ScenarioError("until_day", self.until_day,
+                                    "only allowed for a consolidation stage", "day")
+            require_positive("until_day", self.until_day, "day")
+
+
+@dataclass(frozen=True)
+class Time:
+    """End time of the analysis and the times at which outputs are written (day)."""
+
+    end_day: float
+    output_days: tuple[float, ...] = ()
+
+    def __post_init__(self) -> None:
+        require_positive("end_day", self.end_day, "day")
+        for i, t in enumerate(self.output_days):
+            if not 0.0 <= t <= self.end_day:
+                raise ScenarioError(f"output_days[{i}]", t, f"must be in [0, end_day = "
+                                    f"{self.end_day:g}]", "day")
+
+
+@dataclass(frozen=True)
+class MeshOptions:
+    """Mesh sizing: quads in plan around the piles, extruded down through the layers."""
+
+    size_m: float = 1.0
+    """Plan size of the elements next to the piles, m: h of the paper's mesh study."""
+    far_field_size_m: float = 8.0
+    """Plan size the elements grow to away from the piles, m."""
+    growth: float = 1.3
+    """Plan size growth ratio per element, in (1, 2]."""
+    n_circ_min: int = 32
+    """At least this many element edges around a pile (a multiple of 4, >= 8)."""
+    dz_surface_m: float = 0.5
+    """Vertical element size at the ground surface, m."""
+    dz_toe_m: float = 0.5
+    """Vertical element size at the pile toes, m."""
+    dz_max_m: float = 2.0
+    """Largest vertical element size down to the deepest toe, m."""
+    dz_max_deep_m: float = 4.0
+    """Largest vertical element size below the deepest toe, m.
+
+    It may exceed ``dz_max_m``: the bundled pier667 scenario uses 15 m here and 6 m above.
+    """
+    dz_growth: float = 1.2
+    """Vertical size growth ratio per element, in (1, 2]."""
+    dz_cap_m: float = 0.5
+    """Vertical element size in the cap, m."""
+    min_layer_divisions: int = 2
+    """At least this many elements across every layer."""
+
+    def __post_init__(self) -> None:
+        for key in ("size_m", "far_field_size_m", "dz_surface_m", "dz_toe_m", "dz_max_m",
+                    "dz_max_deep_m", "dz_cap_m"):
+            require_positive(key, getattr(self, key), "m")
+        if self.far_field_size_m < self.size_m:
+            raise ScenarioError("far_field_size_m", self.far_field_size_m,
+                                f"must be >= size_m = {self.size_m:g}", "m")
+        for key in ("growth", "dz_growth"):
+            require_in_range(key, getattr(self, key), 1.0, 2.0, "-", lo_open=True)
+        if self.n_circ_min < 8 or self.n_circ_min % 4:
+            raise ScenarioError("n_circ_min", self.n_circ_min,
+                                "must be a multiple of 4, >= 8", "-")
+        if self.min_layer_divisions < 1:
+            raise ScenarioError("min_layer_divisions", self.min_layer_divisions,
+                                "must be an integer >= 1", "-")
+
+
+@dataclass(frozen=True)
+class TimeStepping:
+    """Adaptive backward-Euler stepping (day)."""
+
+    dt_initial_day: float = 0.5
+    """First step, day."""
+    dt_min_day: float = 1.0e-4
+    """Smallest step, day: the run stops when a cut-back would go below it."""
+    dt_max_day: float = 20.0
+    """Largest step, day."""
+    grow_factor: float = 1.5
+    """Factor on the step after an easy step (>= 1)."""
+    cut_factor: float = 0.25
+    """Factor on the step after a failed step, in (0, 1)."""
+    max_newton: int = 15
+    """Newton iterations at most; a step that needs more fails (and is cut back)."""
+    easy_newton: int = 4
+    """Newton iterations at most of an easy step, in [1, max_newton].
+
+    After an easy step the next one grows by ``grow_factor``.
+    """
+
+    def __post_init__(self) -> None:
+        for key in ("dt_initial_day", "dt_min_day", "dt_max_day"):
+            require_positive(key, getattr(self, key), "day")
+        if self.dt_min_day > self.dt_initial_day or self.dt_initial_day > self.dt_max_day:
+            raise ScenarioError("dt_initial_day", self.dt_initial_day,
+                                "must satisfy dt_min_day <= dt_initial_day <= dt_max_day", "day")
+        if not self.grow_factor >= 1.0:
+            raise ScenarioError("grow_factor", self.grow_factor, "must be >= 1", "-")
+        require_in_range("cut_factor", self.cut_factor, 0.0, 1.0, "-", lo_open=True, hi_open=True)
+        if self.max_newton < 1:
+            raise ScenarioError("max_newton", self.max_newton, "must be an integer >= 1")
+        if not 1 <= self.easy_newton <= self.max_newton:
+            raise ScenarioError("easy_newton", self.easy_newton,
+                                f"must be in [1, max_newton = {self.max_newton}]")
+
+
+@dataclass(frozen=True)
+class LinearSolver:
+    """PETSc linear solver: a named preset merged with user ``options``.
+
+    ``options`` are PETSc option names without the problem prefix. ``auto`` picks ``direct``
+    for small problems.
+    """
+
+    preset: Literal["auto", "direct", "direct_reuse", "fieldsplit_gamg"] = "auto"
+    options: dict[str, str | int | float | bool] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class Numerics:
+    """Discretisation and solution controls.
+
+    Newton accepts an iterate when every block residual (soil and structure displacement, kN;
+    pressure, m^3) is at most ``newton_rtol`` times that block's reference (the largest first
+    residual of the run, for displacements also the norm of the internal force, which holds
+    the geostatic stress) plus ``newton_atol``; ``time.max_newton`` iterations at most.
+    """
+
+    element: Literal["Q2Q1", "Q1Q1"] = "Q2Q1"
+    newton_rtol: float = 1.0e-8
+    newton_atol: float = 1.0e-9
+    mesh: MeshOptions = field(default_factory=MeshOptions)
+    time: TimeStepping = field(default_factory=TimeStepping)
+    solver: LinearSolver = field(default_factory=LinearSolver)
+
+    def __post_init__(self) -> None:
+        require_positive("newton_rtol", self.newton_rtol, "-")
+        require_positive("newton_atol", self.newton_atol, "-")
+
+
+@dataclass(frozen=True)
+class Outputs:
+    """What to write. ``gauge_depths_m``: depths below ground of the pile gauge sections."""
+
+    xdmf: bool = True
+    plots: bool = True
+    gauge_depths_m: tuple[float, ...] = ()
+
+    def __post_init__(self) -> None:
+        for i, z in enumerate(self.gauge_depths_m):
+            require_non_negative(f"gauge_depths_m[{i}]", z, "m")

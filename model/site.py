@@ -1,0 +1,268 @@
+"""The ground and what stands in it: soil block, layers, piles, cap, structural material.
+
+Field names are the TOML keys, so they carry their unit (``E_MPa``, ``k_m_per_day``); properties
+without a unit suffix return internal units (kN, m, day; stresses in kPa). Validation happens
+when a dataclass is built (:mod:`pilegroup.validate`); errors are
+:class:`~pilegroup.errors.ScenarioError` naming the key, value, unit and what is allowed.
+Geometry: plan centred at x = y = 0, ground surface z = 0, z up; the cap sits on the ground
+surface, centred on the plan origin.
+
+A layer's interface friction angle defaults to the paper's Eq. 17, which lives with the laws in
+:mod:`pilegroup.constitutive.paper`: the model's one import from ``constitutive``, a pure
+formula on floats (no numpy, no law), so that the formula is written once.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from pilegroup.constitutive.paper import delta_eq17
+from pilegroup.errors import ScenarioError
+from pilegroup.model.units import KPA_PER_MPA, unit_weight_from_density
+from pilegroup.validate import require_in_range, require_non_negative, require_positive
+
+
+def _require_friction_angle(key: str, value: float) -> None:
+    require_in_range(key, value, 0.0, 60.0, "degree", hi_open=True)
+
+
+class _ElasticMPa:
+    """Elastic constants given as ``E_MPa`` and ``nu``: their checks and ``E`` in kPa."""
+
+    E_MPa: float
+    nu: float
+
+    def _check_elastic(self) -> None:
+        require_positive("E_MPa", self.E_MPa, "MPa")
+        require_in_range("nu", self.nu, 0.0, 0.5, "-", lo_open=True, hi_open=True)
+
+    @property
+    def E(self) -> float:
+        """Young's modulus in kPa."""
+        return self.E_MPa * KPA_PER_MPA
+
+
+@dataclass(frozen=True)
+class InterfaceParams:
+    """Pile-soil interface parameters of one soil layer (paper Table 1, Eqs. 5-17).
+
+    ``eta_MPa_day`` is read as MPa·day per metre of slip (docs/model.md, item 3), so that
+    the slip rate of the zero-thickness interface is in m/day.
+    """
+
+    K: float
+    n: float
+    R_f: float
+    eta_MPa_day: float
+    delta_deg: float | None = None
+
+    def __post_init__(self) -> None:
+        require_positive("K", self.K, "-")
+        require_non_negative("n", self.n, "-")
+        require_in_range("R_f", self.R_f, 0.0, 1.0, "-", hi_open=True)
+        require_positive("eta_MPa_day", self.eta_MPa_day, "MPa·day/m")
+        if self.delta_deg is not None:
+            _require_friction_angle("delta_deg", self.delta_deg)
+
+    @property
+    def eta(self) -> float:
+        """Viscosity in kPa·day/m."""
+        return self.eta_MPa_day * KPA_PER_MPA
+
+
+@dataclass(frozen=True)
+class Layer(_ElasticMPa):
+    """One horizontal soil layer (paper Table 1). The last layer may omit ``thickness_m``."""
+
+    name: str
+    """Free text, e.g. ``"Mud"``."""
+    gamma_kN_per_m3: float
+    """Saturated soil unit weight, kN/m^3 (Table 1's "water unit weight", docs/model.md, item 6)."""
+    E_MPa: float
+    """Young's modulus of the soil skeleton, MPa."""
+    nu: float
+    """Poisson's ratio, in (0, 0.5)."""
+    phi_deg: float
+    """Friction angle, degrees, in [0, 60)."""
+    c_kPa: float
+    """Cohesion, kPa."""
+    k_m_per_day: float
+    """Hydraulic conductivity, m/day (the vertical one when ``k_h_m_per_day`` is given).
+
+    Table 1's permeability column is read as 10^-6 cm/s (docs/model.md, item 5).
+    """
+    e0: float
+    """Initial void ratio."""
+    thickness_m: float | None = None
+    """Thickness, m; the last layer may omit it and then reaches the block bottom."""
+    psi_deg: float = 0.0
+    """Dilatancy angle, degrees, in [0, phi_deg]."""
+    k_h_m_per_day: float | None = None
+    """Horizontal hydraulic conductivity, m/day; None: equal to ``k_m_per_day``."""
+    interface: InterfaceParams | None = None
+    """Pile-soil interface parameters; needed where the piles cross the layer (not tied)."""
+
+    def __post_init__(self) -> None:
+        if not self.name.strip():
+            raise ScenarioError("name", self.name, "must be a non-empty string")
+        if self.thickness_m is not None:
+            require_positive("thickness_m", self.thickness_m, "m")
+        require_positive("gamma_kN_per_m3", self.gamma_kN_per_m3, "kN/m^3")
+        self._check_elastic()
+        _require_friction_angle("phi_deg", self.phi_deg)
+        require_non_negative("c_kPa", self.c_kPa, "kPa")
+        if not 0.0 <= self.psi_deg <= self.phi_deg:
+            raise ScenarioError("psi_deg", self.psi_deg,
+                                f"must be in [0, phi_deg = {self.phi_deg}]", "degree")
+        require_positive("k_m_per_day", self.k_m_per_day, "m/day")
+        if self.k_h_m_per_day is not None:
+            require_positive("k_h_m_per_day", self.k_h_m_per_day, "m/day")
+        require_positive("e0", self.e0, "-")
+
+    @property
+    def porosity(self) -> float:
+        """Porosity n = e0 / (1 + e0)."""
+        return self.e0 / (1.0 + self.e0)
+
+    @property
+    def K0(self) -> float:
+        """Earth pressure coefficient at rest, Jaky: 1 - sin(phi)."""
+        return 1.0 - math.sin(math.radians(self.phi_deg))
+
+    @property
+    def k_h(self) -> float:
+        """Horizontal permeability in m/day (isotropic unless ``k_h_m_per_day`` is given)."""
+        return self.k_m_per_day if self.k_h_m_per_day is None else self.k_h_m_per_day
+
+    @property
+    def delta_deg(self) -> float:
+        """Interface friction angle: Table 1 value if given, else Eq. 17 from phi."""
+        if self.interface is not None and self.interface.delta_deg is not None:
+            return self.interface.delta_deg
+        return delta_eq17(self.phi_deg)
+
+
+@dataclass(frozen=True)
+class _PlanRectangle:
+    """A rectangle in plan centred on the origin, ``size_x_m`` x ``size_y_m`` (m)."""
+
+    size_x_m: float
+    size_y_m: float
+
+    def __post_init__(self) -> None:
+        require_positive("size_x_m", self.size_x_m, "m")
+        require_positive("size_y_m", self.size_y_m, "m")
+
+
+@dataclass(frozen=True)
+class Site(_PlanRectangle):
+    """The soil block: plan size, depth, water table (depth below ground, m)."""
+
+    depth_m: float
+    water_table_depth_m: float = 0.0
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        require_positive("depth_m", self.depth_m, "m")
+        require_non_negative("water_table_depth_m", self.water_table_depth_m, "m")
+        if self.water_table_depth_m > self.depth_m:
+            raise ScenarioError("water_table_depth_m", self.water_table_depth_m,
+                                f"must be <= depth_m = {self.depth_m}", "m")
+
+
+@dataclass(frozen=True)
+class Piles:
+    """The piles: a regular grid centred on the cap, or explicit positions.
+
+    Either ``grid`` [nx, ny] with ``spacing_m`` [sx, sy], or ``positions_m`` [[x, y], ...] (m,
+    plan coordinates).
+    """
+
+    diameter_m: float
+    length_in_soil_m: float
+    embedment_m: float = 0.0
+    grid: tuple[int, int] | None = None
+    spacing_m: tuple[float, float] | None = None
+    positions_m: tuple[tuple[float, float], ...] | None = None
+
+    def __post_init__(self) -> None:
+        require_positive("diameter_m", self.diameter_m, "m")
+        require_positive("length_in_soil_m", self.length_in_soil_m, "m")
+        require_non_negative("embedment_m", self.embedment_m, "m")
+        if self.positions_m is not None:
+            if self.grid is not None or self.spacing_m is not None:
+                raise ScenarioError("positions_m", list(self.positions_m),
+                                    "give either positions_m or grid + spacing_m, not both", "m")
+            if len(self.positions_m) == 0:
+                raise ScenarioError("positions_m", [], "must list at least one pile", "m")
+        else:
+            if self.grid is None:
+                raise ScenarioError("grid", None, "missing: give grid = [nx, ny] with spacing_m,"
+                                    " or positions_m")
+            for i, v in enumerate(self.grid):
+                if v < 1:
+                    raise ScenarioError(f"grid[{i}]", v, "must be an integer >= 1")
+            needs = any(v > 1 for v in self.grid)
+            if self.spacing_m is None:
+                if needs:
+                    raise ScenarioError("spacing_m", None, "missing: required when grid > 1x1",
+                                        "m")
+            else:
+                for i, v in enumerate(self.spacing_m):
+                    require_positive(f"spacing_m[{i}]", v, "m")
+        xy = self.xy
+        for i in range(len(xy)):
+            for j in range(i):
+                dist = math.dist(xy[i], xy[j])
+                if dist < self.diameter_m:
+                    raise ScenarioError(
+                        "positions_m" if self.positions_m is not None else "spacing_m",
+                        [list(xy[j]), list(xy[i])],
+                        f"piles {j + 1} and {i + 1} overlap: centre distance {dist:g} m must be"
+                        f" >= diameter_m = {self.diameter_m:g}", "m")
+
+    @property
+    def xy(self) -> tuple[tuple[float, float], ...]:
+        """Plan positions (m) of every pile, numbered row by row (x fastest) from 1."""
+        if self.positions_m is not None:
+            return tuple((float(x), float(y)) for x, y in self.positions_m)
+        nx, ny = self.grid  # type: ignore[misc]
+        sx, sy = self.spacing_m if self.spacing_m is not None else (0.0, 0.0)
+        return tuple(((i - (nx - 1) / 2) * sx, (j - (ny - 1) / 2) * sy)
+                     for j in range(ny) for i in range(nx))
+
+    @property
+    def count(self) -> int:
+        """Number of piles."""
+        return len(self.xy)
+
+
+@dataclass(frozen=True)
+class Cap(_PlanRectangle):
+    """Rectangular pile cap centred on the plan origin, bottom on the ground surface."""
+
+    thickness_m: float
+    in_contact_with_soil: bool = False
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        require_positive("thickness_m", self.thickness_m, "m")
+
+
+@dataclass(frozen=True)
+class Structure(_ElasticMPa):
+    """Linear elastic material of piles and cap."""
+
+    E_MPa: float
+    nu: float
+    density_kg_per_m3: float
+
+    def __post_init__(self) -> None:
+        self._check_elastic()
+        require_positive("density_kg_per_m3", self.density_kg_per_m3, "kg/m^3")
+
+    @property
+    def gamma(self) -> float:
+        """Unit weight in kN/m^3."""
+        return unit_weight_from_density(self.density_kg_per_m3)

@@ -1,0 +1,85 @@
+"""The exceptions pilegroup raises on purpose: one family under :class:`PilegroupError`.
+
+Which class names which kind of failure:
+
+* :class:`ScenarioError`: a scenario file or value, or a geometry specification, is invalid
+  (the CLI exits with code 2);
+* :class:`ConstitutiveError`: a parameter or input of a constitutive law is invalid;
+* :class:`SolverError` and its subclasses: a solver input is invalid, or a run failed (the CLI
+  exits with code 1).
+
+The input errors are also ``ValueError`` (``except ValueError`` catches them). An error about
+one value names the key, the value, its unit and what is allowed, in the form of
+:func:`describe`; :mod:`pilegroup.validate` builds such errors with
+:meth:`PilegroupError.invalid`.
+"""
+
+from __future__ import annotations
+
+from typing import Self
+
+
+def describe(key: str, value: object, allowed: str, unit: str = "") -> str:
+    """One line naming a rejected value, e.g. ``layers[2].nu = 0.55 (-): must be in (0, 0.5)``.
+
+    Strings are quoted; the unit is shown in brackets when given.
+    """
+    shown = repr(value) if isinstance(value, str) else value
+    unit_txt = f" ({unit})" if unit else ""
+    return f"{key} = {shown}{unit_txt}: {allowed}"
+
+
+class PilegroupError(Exception):
+    """Base class of every error pilegroup raises on purpose."""
+
+    @classmethod
+    def invalid(cls, key: str, value: object, allowed: str, unit: str = "") -> Self:
+        """The error for ``key = value`` (in ``unit``), which is not ``allowed``."""
+        return cls(describe(key, value, allowed, unit))
+
+
+class ScenarioError(PilegroupError, ValueError):
+    """A scenario file or value (or a geometry specification) is invalid.
+
+    The message always names the key (dotted path as in the TOML file), the value, its unit and
+    what is allowed, e.g. ``layers[2].nu = 0.55 (-): must be in (0, 0.5)``; the four parts are
+    also attributes, so that the loader can prefix the key with the path of its table.
+    """
+
+    def __init__(self, key: str, value: object, allowed: str, unit: str = "") -> None:
+        self.key = key
+        self.value = value
+        self.allowed = allowed
+        self.unit = unit
+        super().__init__(describe(key, value, allowed, unit))
+
+    @classmethod
+    def invalid(cls, key: str, value: object, allowed: str, unit: str = "") -> Self:
+        """The error for ``key = value`` (in ``unit``), which is not ``allowed``."""
+        return cls(key, value, allowed, unit)
+
+
+class ConstitutiveError(PilegroupError, ValueError):
+    """Invalid parameter or input of a constitutive law (or its return mapping failed)."""
+
+
+class SolverError(PilegroupError, RuntimeError):
+    """Base class of the solver's errors (a run failed: the CLI exits with code 1)."""
+
+
+class SolverInputError(SolverError, ValueError):
+    """An input of the solver is invalid; the message names the field, value, unit and range."""
+
+
+class ConvergenceError(SolverError):
+    """Newton or the linear solver failed (diverged, NaN, iteration limit)."""
+
+
+class StepFailure(SolverError):
+    """The adaptive stepper could not complete a step even at the minimum step size."""
+
+
+__all__ = [
+    "ConstitutiveError", "ConvergenceError", "PilegroupError", "ScenarioError", "SolverError",
+    "SolverInputError", "StepFailure", "describe",
+]
