@@ -5,7 +5,7 @@ and loads; run :func:`run_stages` over a list of :class:`Stage` with :class:`Tim
 Units kN, m, day; tension positive; ``p`` = excess pore pressure (compression positive).
 """
 
-from pilegroup.solver.errors import ConvergenceError, SolverError, SolverInputError, StepFailure
+from pilegroup.errors import ConvergenceError, SolverError, SolverInputError, StepFailure
 from pilegroup.solver.exports import (
     Export,
     SettlementSeries,

@@ -16,7 +16,7 @@ from dolfinx.fem import petsc as fpetsc
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from pilegroup.solver.errors import SolverInputError
+from pilegroup.errors import SolverInputError
 from pilegroup.solver.inputs import DisplacementBC, PressureBC, RigidPlate
 from pilegroup.solver.interface import NodalInterface
 from pilegroup.solver.layout import BlockLayout

@@ -1,7 +1,7 @@
 """Frozen inputs of the coupled solver (the scenario model maps onto these).
 
 Units: kN, m, day (stress kPa, permeability m/day, unit weight kN/m^3). Tension positive;
-``p`` is the excess pore pressure, compression of the water positive (design.md §4).
+``p`` is the excess pore pressure, compression of the water positive (docs/model.md).
 """
 
 from __future__ import annotations
@@ -11,7 +11,10 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
-from pilegroup.constitutive.soil import require_elastic_constants
+import numpy as np
+
+from pilegroup.constitutive.base import ConstitutiveLaw
+from pilegroup.constitutive.soil import LinearElastic, require_elastic_constants
 from pilegroup.errors import SolverInputError
 from pilegroup.model.units import GAMMA_WATER, K_WATER
 from pilegroup.validate import require_in_range, require_non_negative, require_positive
@@ -37,7 +40,7 @@ class SoilMaterial:
         K_w: bulk modulus of the pore water, kPa.
     """
 
-    law: Any
+    law: ConstitutiveLaw
     k_m_per_day: float
     porosity: float
     gamma_sat: float = GAMMA_W
@@ -102,10 +105,8 @@ class ElasticSolid:
         require_elastic_constants(self.E, self.nu, error=SolverInputError)
 
     @property
-    def law(self) -> Any:
+    def law(self) -> LinearElastic:
         """The constitutive law (LinearElastic)."""
-        from pilegroup.constitutive.soil import LinearElastic
-
         return LinearElastic(self.E, self.nu)
 
     def elastic_moduli(self) -> tuple[float, float]:
@@ -131,8 +132,8 @@ class InterfaceCoupling:
             measured comparison is in docs/solver.md ("Interface quadrature").
     """
 
-    laws: tuple[Any, ...]
-    traction0: Callable[[Any, int], Any] | None = None
+    laws: tuple[ConstitutiveLaw | None, ...]
+    traction0: Callable[[np.ndarray, int], np.ndarray] | None = None
     quadrature: Literal["nodal", "gauss"] = "nodal"
 
     def __post_init__(self) -> None:
@@ -340,7 +341,3 @@ class Stage:
             raise SolverInputError(f"stage {self.name!r}: kind = {self.kind!r}")
         require_non_negative(f"stage {self.name!r} duration", self.duration, "day",
                              error=SolverInputError)
-
-
-#: Signature of an initial-stress provider: (points (n,3) m, material) -> (n,6) Mandel kPa.
-InitialStress = Callable[[Any, SoilMaterial], Any]

@@ -23,9 +23,9 @@ from dolfinx.fem import petsc as fpetsc
 from mpi4py import MPI
 from petsc4py import PETSc
 
+from pilegroup.errors import SolverInputError
 from pilegroup.geometry import groups
 from pilegroup.geometry.meshdata import MeshData
-from pilegroup.solver.errors import SolverInputError
 from pilegroup.solver.inputs import Discretisation, ElasticSolid, SoilMaterial
 from pilegroup.solver.qpstate import QuadratureState
 

@@ -28,7 +28,7 @@ from typing import Any
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from pilegroup.solver.errors import ConvergenceError, SolverInputError
+from pilegroup.errors import ConvergenceError, SolverInputError
 
 
 @dataclass(frozen=True)

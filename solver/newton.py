@@ -29,7 +29,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from petsc4py import PETSc
 
-from pilegroup.solver.errors import ConvergenceError
+from pilegroup.errors import ConvergenceError
 from pilegroup.solver.inputs import NewtonOptions
 
 if TYPE_CHECKING:

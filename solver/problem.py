@@ -25,10 +25,10 @@ from dolfinx.fem import petsc as fpetsc
 from mpi4py import MPI
 from petsc4py import PETSc
 
+from pilegroup.errors import ConvergenceError, SolverInputError
 from pilegroup.geometry import groups
 from pilegroup.geometry.meshdata import MeshData
 from pilegroup.solver.constraints import Constraints, RigidPlateControl
-from pilegroup.solver.errors import ConvergenceError, SolverInputError
 from pilegroup.solver.forms import Coefficients, FormBuilder
 from pilegroup.solver.geostatic import SoilColumn
 from pilegroup.solver.inputs import (

@@ -25,7 +25,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
-from pilegroup.solver.errors import SolverError, StepFailure
+from pilegroup.errors import SolverError, StepFailure
 from pilegroup.solver.exports import Export
 from pilegroup.solver.inputs import Stage, TimeStepping
 
