@@ -6,8 +6,8 @@ points up, the soil occupies ``-depth <= z <= 0`` and the cap sits on the ground
 (``0 <= z <= cap.thickness``). A pile with ``length_in_soil = L`` and ``embedment = e`` spans
 ``-L <= z <= e`` (its top ``e`` metres lie inside the cap).
 
-The lead's adapter turns a scenario into a :class:`GeometrySpec`; :func:`pier667_default` and
-:func:`single_pile` build specs directly for tests and benchmarks.
+:func:`pilegroup.geometry.adapter.geometry_spec` turns a scenario into a :class:`GeometrySpec`;
+:func:`pier667_default` and :func:`single_pile` build specs directly for tests and benchmarks.
 """
 
 from __future__ import annotations
@@ -18,6 +18,7 @@ import math
 from dataclasses import asdict, dataclass, field, replace
 from typing import Any
 
+from pilegroup.geometry.groups import MAX_LAYERS, MAX_PILES
 from pilegroup.model.errors import (
     ScenarioError,
     require_finite,
@@ -85,7 +86,8 @@ class LayerSpec:
     """A horizontal soil layer, listed from the ground surface down.
 
     Attributes:
-        name: free text (e.g. ``"Mud"``); the physical group is ``soil_layer_{index:02d}``.
+        name: free text (e.g. ``"Mud"``); the cell group is :func:`~.groups.soil_layer` of the
+            layer's 1-based index.
         thickness: m; ``None`` only for the last layer, which then extends to the block bottom.
         dz_max: optional cap (m) on the vertical element size inside this layer.
     """
@@ -238,8 +240,8 @@ class GeometrySpec:
     def _check_layers(self) -> None:
         if not self.layers:
             raise ScenarioError("layers", [], "must list at least one layer")
-        if len(self.layers) > 99:
-            raise ScenarioError("layers", len(self.layers), "at most 99 layers", "-")
+        if len(self.layers) > MAX_LAYERS:
+            raise ScenarioError("layers", len(self.layers), f"at most {MAX_LAYERS} layers", "-")
         for j, lay in enumerate(self.layers[:-1]):
             if lay.thickness is None:
                 raise ScenarioError(f"layers[{j}].thickness", None,
@@ -265,8 +267,8 @@ class GeometrySpec:
         b = self.block
         if not self.piles:
             raise ScenarioError("piles", [], "must list at least one pile")
-        if len(self.piles) > 99:
-            raise ScenarioError("piles", len(self.piles), "at most 99 piles", "-")
+        if len(self.piles) > MAX_PILES:
+            raise ScenarioError("piles", len(self.piles), f"at most {MAX_PILES} piles", "-")
         for i, p in enumerate(self.piles):
             if p.length_in_soil >= b.depth * (1 - _REL):
                 raise ScenarioError(f"piles[{i}].length_in_soil", p.length_in_soil,
