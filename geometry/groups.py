@@ -171,7 +171,7 @@ _NUMBERED = ((layer_of, soil_layer_tag), (pile_of, pile_tag), (base_of, base_tag
 
 
 def tag_of(name: str) -> int:
-    """Tag value of the cell or facet group ``name`` (table above); ``ValueError`` if unknown."""
+    """Tag value of the group ``name`` (module docstring table); ``ValueError`` if unknown."""
     if name == CAP:
         return CAP_TAG
     if name in FACET_TAGS:

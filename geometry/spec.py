@@ -345,7 +345,7 @@ class GeometrySpec:
         return hashlib.sha256(payload.encode()).hexdigest()[:20]
 
     @classmethod
-    def pier667_default(cls, h: float = 1.0, **sizing: Any) -> GeometrySpec:
+    def pier667_default(cls, h: float = 1.0, **sizing: float) -> GeometrySpec:
         """Shorthand for :func:`pier667_default`."""
         return pier667_default(h, **sizing)
 
@@ -361,7 +361,7 @@ def grid_piles(nx: int, ny: int, sx: float, sy: float, diameter: float, length_i
                  for j in range(ny) for i in range(nx))
 
 
-def pier667_default(h: float = 1.0, **sizing: Any) -> GeometrySpec:
+def pier667_default(h: float = 1.0, **sizing: float) -> GeometrySpec:
     """Pier 667 (paper Section 5, Table 1): 101 x 75 x 128 m block, Table-1 layers, 3 x 3 piles.
 
     Piles: d = 1.0 m, 63.5 m in soil, 1.0 m embedded in a 10.1 x 7.4 x 2.5 m cap. ASSUMPTION
@@ -383,7 +383,7 @@ def pier667_default(h: float = 1.0, **sizing: Any) -> GeometrySpec:
 #: (cross-section area within 0.84 % of pi d^2/4), far field growing to 16 m, element layers
 #: from 1 m at the surface and the toes to 6 m (15 m below the toes): 66,294 hexahedra at
 #: h = 1 m (the paper's coarsest mesh: 57,108), so that the 317-day run fits the time budget.
-PIER667_SIZING: dict[str, Any] = {
+PIER667_SIZING: dict[str, float] = {
     "n_circ_min": 28, "h_far": 16.0, "growth": 1.6, "dz_surface": 1.0, "dz_toe": 1.0,
     "dz_max": 6.0, "dz_max_deep": 15.0, "dz_growth": 1.4, "dz_cap": 1.5,
 }
@@ -391,7 +391,7 @@ PIER667_SIZING: dict[str, Any] = {
 
 def single_pile(diameter: float = 1.0, length_in_soil: float = 10.0, size_x: float = 20.0,
                 size_y: float | None = None, depth: float = 20.0, h: float = 0.5,
-                layer_name: str = "soil", **sizing: Any) -> GeometrySpec:
+                layer_name: str = "soil", **sizing: float) -> GeometrySpec:
     """One pile at the origin in one homogeneous layer, no cap (head on the ground surface).
 
     Lengths in m; ``sizing`` overrides :class:`MeshSizing` fields (e.g. ``h_far``).
