@@ -11,6 +11,9 @@ import sys
 import time
 from typing import Any
 
+from mpi4py import MPI
+
+from pilegroup.geometry.convert import build_mesh
 from pilegroup.geometry.spec import GeometrySpec, pier667_default
 
 __all__ = ["PAPER_TABLE2", "benchmark_mesh_sizes", "format_table"]
@@ -21,17 +24,13 @@ PAPER_TABLE2 = {1.0: 57108, 0.8: 63553, 0.6: 71141, 0.3: 105522, 0.1: 255221}
 
 def benchmark_mesh_sizes(sizes: tuple[float, ...] = tuple(PAPER_TABLE2),
                          spec: GeometrySpec | None = None, convert: bool = True,
-                         comm: Any = None) -> list[dict[str, Any]]:
+                         comm: MPI.Comm | None = None) -> list[dict[str, Any]]:
     """Mesh ``spec`` (default Pier 667) at each h (m) without the cache; one row per size.
 
     Row: h, cells, vertices, plan quads, vertical divisions, min scaled Jacobian (gmsh
     "minSJ"), gmsh time (geometry + meshing, s), quality time, DOLFINx conversion time (s).
     """
-    from pilegroup.geometry.convert import build_mesh
-
     if comm is None:
-        from mpi4py import MPI
-
         comm = MPI.COMM_WORLD
     base = spec if spec is not None else pier667_default()
     rows = []

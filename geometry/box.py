@@ -11,23 +11,26 @@ and ``ground_surface`` (the top). Ghost mode is ``shared_facet``.
 from __future__ import annotations
 
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
+import dolfinx.mesh as dmesh
 import numpy as np
 from mpi4py import MPI
 
+from pilegroup.geometry.groups import (
+    BOTTOM,
+    FACET_TAGS,
+    GROUND,
+    SIDES,
+    soil_layer,
+    soil_layer_tag,
+)
 from pilegroup.geometry.meshdata import MeshData
 
 __all__ = ["build_box", "graded_levels"]
 
-FACET_NAMES = {
-    "side_xmin": 1,
-    "side_xmax": 2,
-    "side_ymin": 3,
-    "side_ymax": 4,
-    "bottom": 5,
-    "ground_surface": 6,
-}
+#: The facet groups of a box: its sides, bottom and top (tags of :mod:`~.groups`).
+FACET_NAMES = {name: FACET_TAGS[name] for name in (*SIDES, BOTTOM, GROUND)}
 
 
 def graded_levels(z_bottom: float, z_top: float, n: int, ratio: float = 1.0) -> np.ndarray:
@@ -51,6 +54,65 @@ def graded_levels(z_bottom: float, z_top: float, n: int, ratio: float = 1.0) -> 
     z = z_top - depth
     z[-1] = z_bottom
     return z[::-1].copy()
+
+
+def _graded_box(comm: MPI.Comm, x: tuple[float, float], y: tuple[float, float],
+                zl: np.ndarray, nx: int, ny: int) -> dmesh.Mesh:
+    """Hexahedral box on ``comm`` with its node levels moved to the elevations ``zl``."""
+    nz = zl.size - 1
+    msh = dmesh.create_box(
+        comm,
+        [np.array([x[0], y[0], 0.0]), np.array([x[1], y[1], float(nz)])],
+        [nx, ny, nz],
+        cell_type=dmesh.CellType.hexahedron,
+        ghost_mode=dmesh.GhostMode.shared_facet,
+    )
+    gx = msh.geometry.x
+    gx[:, 2] = np.interp(gx[:, 2], np.arange(nz + 1, dtype=float), zl)
+    return msh
+
+
+def _facet_tags(msh: dmesh.Mesh, x: tuple[float, float], y: tuple[float, float], zb: float,
+                zt: float) -> dmesh.MeshTags:
+    """Tags of the boundary facets: :data:`FACET_NAMES` by position."""
+    fdim = msh.topology.dim - 1
+    msh.topology.create_connectivity(fdim, fdim + 1)
+    tol = 1e-8 * max(x[1] - x[0], y[1] - y[0], zt - zb)
+    at: dict[str, Callable[[np.ndarray], np.ndarray]] = {
+        SIDES[0]: lambda p: np.isclose(p[0], x[0], atol=tol),
+        SIDES[1]: lambda p: np.isclose(p[0], x[1], atol=tol),
+        SIDES[2]: lambda p: np.isclose(p[1], y[0], atol=tol),
+        SIDES[3]: lambda p: np.isclose(p[1], y[1], atol=tol),
+        BOTTOM: lambda p: np.isclose(p[2], zb, atol=tol),
+        GROUND: lambda p: np.isclose(p[2], zt, atol=tol),
+    }
+    f_idx, f_val = [], []
+    for name, marker in at.items():
+        facets = dmesh.locate_entities_boundary(msh, fdim, marker)
+        f_idx.append(facets)
+        f_val.append(np.full(facets.size, FACET_NAMES[name], dtype=np.int32))
+    f_idx_a = np.concatenate(f_idx).astype(np.int32)
+    f_val_a = np.concatenate(f_val)
+    order = np.argsort(f_idx_a, kind="stable")
+    # edge facets belong to two groups only in degenerate boxes (never: facets are planar)
+    return dmesh.meshtags(msh, fdim, f_idx_a[order], f_val_a[order])
+
+
+def _layer_tags(msh: dmesh.Mesh, tops: list[float]) -> tuple[dmesh.MeshTags, dict[str, int]]:
+    """Cell tags of the soil layers (by cell-centre elevation, numbered from the top) and names.
+
+    ``tops``: the internal layer boundaries (m), descending.
+    """
+    tdim = msh.topology.dim
+    imap = msh.topology.index_map(tdim)
+    ncells = imap.size_local + imap.num_ghosts
+    cells = np.arange(ncells, dtype=np.int32)
+    zc = dmesh.compute_midpoints(msh, tdim, cells)[:, 2]
+    layer = np.full(ncells, soil_layer_tag(1), dtype=np.int32)
+    for t in tops:
+        layer += (zc < t).astype(np.int32)
+    names = {soil_layer(j): soil_layer_tag(j) for j in range(1, len(tops) + 2)}
+    return dmesh.meshtags(msh, tdim, cells, layer), names
 
 
 def build_box(
@@ -79,68 +141,23 @@ def build_box(
         :class:`MeshData` with cell groups ``soil_layer_NN`` (numbered from the top) and the
         facet groups of the module docstring.
     """
-    import dolfinx.mesh as dmesh  # after pilegroup (dolfinx_solver ordering)
-
     t0 = time.perf_counter()
     zl = np.asarray(z_levels, dtype=float)
     if zl.ndim != 1 or zl.size < 2 or np.any(np.diff(zl) <= 0):
         raise ValueError("z_levels must be a strictly ascending 1D array of >= 2 elevations (m)")
-    nz = zl.size - 1
-    msh = dmesh.create_box(
-        comm,
-        [np.array([x[0], y[0], 0.0]), np.array([x[1], y[1], float(nz)])],
-        [nx, ny, nz],
-        cell_type=dmesh.CellType.hexahedron,
-        ghost_mode=dmesh.GhostMode.shared_facet,
-    )
-    gx = msh.geometry.x
-    gx[:, 2] = np.interp(gx[:, 2], np.arange(nz + 1, dtype=float), zl)
-
-    tdim = msh.topology.dim
-    fdim = tdim - 1
-    msh.topology.create_connectivity(fdim, tdim)
+    msh = _graded_box(comm, x, y, zl, nx, ny)
     zb, zt = float(zl[0]), float(zl[-1])
-    lx = max(x[1] - x[0], y[1] - y[0], zt - zb)
-    tol = 1e-8 * lx
-    markers = {
-        "side_xmin": lambda p: np.isclose(p[0], x[0], atol=tol),
-        "side_xmax": lambda p: np.isclose(p[0], x[1], atol=tol),
-        "side_ymin": lambda p: np.isclose(p[1], y[0], atol=tol),
-        "side_ymax": lambda p: np.isclose(p[1], y[1], atol=tol),
-        "bottom": lambda p: np.isclose(p[2], zb, atol=tol),
-        "ground_surface": lambda p: np.isclose(p[2], zt, atol=tol),
-    }
-    f_idx, f_val = [], []
-    for name, marker in markers.items():
-        facets = dmesh.locate_entities_boundary(msh, fdim, marker)
-        f_idx.append(facets)
-        f_val.append(np.full(facets.size, FACET_NAMES[name], dtype=np.int32))
-    f_idx_a = np.concatenate(f_idx).astype(np.int32)
-    f_val_a = np.concatenate(f_val)
-    order = np.argsort(f_idx_a, kind="stable")
-    # edge facets belong to two groups only in degenerate boxes (never: facets are planar)
-    facet_tags = dmesh.meshtags(msh, fdim, f_idx_a[order], f_val_a[order])
-
-    # cell groups: layers by cell-centre elevation, numbered from the top
-    imap = msh.topology.index_map(tdim)
-    ncells = imap.size_local + imap.num_ghosts
-    cells = np.arange(ncells, dtype=np.int32)
-    zc = dmesh.compute_midpoints(msh, tdim, cells)[:, 2]
+    facet_tags = _facet_tags(msh, x, y, zb, zt)
     tops = sorted({float(t) for t in (layer_tops or []) if zb < float(t) < zt}, reverse=True)
-    layer = np.ones(ncells, dtype=np.int32)
-    for t in tops:
-        layer += (zc < t).astype(np.int32)
-    cell_tags = dmesh.meshtags(msh, tdim, cells, layer)
-    cell_names = {f"soil_layer_{i:02d}": i for i in range(1, len(tops) + 2)}
-
+    cell_tags, cell_names = _layer_tags(msh, tops)
     info = {
         "builder": "geometry.box.build_box",
         "x": list(x),
         "y": list(y),
         "z_bottom": zb,
         "z_top": zt,
-        "cells": [nx, ny, nz],
-        "num_cells_global": int(imap.size_global),
+        "cells": [nx, ny, zl.size - 1],
+        "num_cells_global": int(msh.topology.index_map(msh.topology.dim).size_global),
         "layer_tops": tops,
         "seconds": time.perf_counter() - t0,
     }

@@ -18,11 +18,17 @@ from __future__ import annotations
 
 import json
 import os
-import tempfile
 import time
 from pathlib import Path
+from types import ModuleType
 from typing import Any
 
+import gmsh
+from dolfinx.io import gmsh as dgmsh
+from dolfinx.mesh import GhostMode, create_cell_partitioner
+from mpi4py import MPI
+
+from pilegroup.fileio import atomic_path, write_text_atomic
 from pilegroup.geometry.meshdata import MeshData
 from pilegroup.geometry.pier import build_gmsh_model
 from pilegroup.geometry.spec import GeometrySpec
@@ -48,17 +54,13 @@ def default_cache_dir() -> Path:
 
 
 def _cache_key(spec: GeometrySpec) -> str:
-    import gmsh
-
     return spec.cache_key(f"{BUILDER_VERSION}|gmsh {gmsh.__version__}")
 
 
 class gmsh_session:  # noqa: N801 - used like a function: ``with gmsh_session(): ...``
     """Context manager: initialise gmsh if needed (quiet, no signal handler), finalise after."""
 
-    def __enter__(self) -> Any:
-        import gmsh
-
+    def __enter__(self) -> ModuleType:
         self.owner = not gmsh.isInitialized()
         if self.owner:
             gmsh.initialize(readConfigFiles=False, interruptible=False)
@@ -66,25 +68,12 @@ class gmsh_session:  # noqa: N801 - used like a function: ``with gmsh_session():
         return gmsh
 
     def __exit__(self, *exc: object) -> None:
-        import gmsh
-
         if self.owner and gmsh.isInitialized():
             gmsh.finalize()
 
 
-def _write_atomic(write: Any, target: Path) -> None:
-    target.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=target.stem, suffix=target.suffix)
-    os.close(fd)
-    try:
-        write(tmp)
-        os.replace(tmp, target)
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-
-
-def _build_and_write(gmsh: Any, spec: GeometrySpec, msh: Path | None) -> dict[str, Any]:
+def _build_and_write(spec: GeometrySpec, msh: Path | None) -> dict[str, Any]:
+    """Build ``spec`` in the current gmsh model; write it to ``msh`` with its info (``.json``)."""
     res = build_gmsh_model(spec)
     info = res.to_dict()
     if msh is not None:
@@ -92,10 +81,10 @@ def _build_and_write(gmsh: Any, spec: GeometrySpec, msh: Path | None) -> dict[st
         gmsh.option.setNumber("Mesh.SaveAll", 0)
         gmsh.option.setNumber("Mesh.Binary", 1)
         gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
-        _write_atomic(gmsh.write, msh)
+        with atomic_path(msh) as tmp:
+            gmsh.write(str(tmp))
         info["timings"]["write_s"] = time.perf_counter() - t0
-        _write_atomic(lambda p: Path(p).write_text(json.dumps(info, indent=1)),
-                      msh.with_suffix(".json"))
+        write_text_atomic(msh.with_suffix(".json"), json.dumps(info, indent=1))
     return info
 
 
@@ -106,7 +95,7 @@ def ensure_msh(spec: GeometrySpec, cache_dir: str | Path | None = None,
     Serial (call it on one rank). ``info["cache_hit"]`` tells whether the mesh was reused.
     """
     cdir = Path(cache_dir) if cache_dir is not None else default_cache_dir()
-    with gmsh_session() as gmsh:
+    with gmsh_session():
         key = _cache_key(spec)
         msh = cdir / f"{key}.msh"
         meta = msh.with_suffix(".json")
@@ -115,7 +104,7 @@ def ensure_msh(spec: GeometrySpec, cache_dir: str | Path | None = None,
             info["cache_hit"] = True
         else:
             gmsh.model.add("ensure")
-            info = _build_and_write(gmsh, spec, msh)
+            info = _build_and_write(spec, msh)
             gmsh.model.remove()
             info["cache_hit"] = False
     info["cache_key"] = key
@@ -123,7 +112,7 @@ def ensure_msh(spec: GeometrySpec, cache_dir: str | Path | None = None,
     return msh, info
 
 
-def build_mesh(spec: GeometrySpec, comm: Any, cache_dir: str | Path | None | bool = None,
+def build_mesh(spec: GeometrySpec, comm: MPI.Comm, cache_dir: str | Path | None | bool = None,
                force: bool = False, rank: int = 0) -> MeshData:
     """Mesh ``spec`` (lengths in m) and distribute it over ``comm``: a :class:`MeshData`.
 
@@ -133,18 +122,15 @@ def build_mesh(spec: GeometrySpec, comm: Any, cache_dir: str | Path | None | boo
     information (``n_hex``, ``min_sj``, timings, ``cache_hit``, ``cache_key``) and the global
     counts ``num_cells`` / ``num_vertices`` of the distributed mesh.
     """
-    from dolfinx.io import gmsh as dgmsh
-    from dolfinx.mesh import GhostMode, create_cell_partitioner
-
     t0 = time.perf_counter()
     info: dict[str, Any] = {}
     model = None
-    with gmsh_session() as gmsh:
+    with gmsh_session():
         if comm.rank == rank:
             try:
                 if cache_dir is False:
                     gmsh.model.add("pilegroup")
-                    info = _build_and_write(gmsh, spec, None)
+                    info = _build_and_write(spec, None)
                     info["cache_hit"] = False
                 else:
                     path, info = ensure_msh(spec, None if cache_dir is True else cache_dir,

@@ -35,14 +35,18 @@ BOTTOM = "bottom"
 GROUND = "ground_surface"
 CAP_BOTTOM, CAP_TOP, CAP_SIDE = "cap_bottom", "cap_top", "cap_side"
 #: Fixed facet tags of the named block and cap faces.
-FACET_TAGS = {"side_xmin": 1, "side_xmax": 2, "side_ymin": 3, "side_ymax": 4, BOTTOM: 5,
+FACET_TAGS = {SIDES[0]: 1, SIDES[1]: 2, SIDES[2]: 3, SIDES[3]: 4, BOTTOM: 5,
               GROUND: 6, CAP_BOTTOM: 7, CAP_TOP: 8, CAP_SIDE: 9}
+#: Most soil layers and most piles a mesh may have: up to these counts every tag of the table
+#: above is distinct (pile cells 101..199 lie between the layers and the cap, and so on).
+MAX_LAYERS = MAX_PILES = 99
 
 _SOIL = re.compile(r"soil_layer_(\d+)$")
 _PILE = re.compile(r"pile_(\d+)$")
 _SHAFT = re.compile(r"shaft_p(\d+)_l(\d+)$")
 _BASE = re.compile(r"base_p(\d+)$")
 _HEAD = re.compile(r"head_p(\d+)$")
+_EMBED = re.compile(r"embed_p(\d+)$")
 
 
 def soil_layer(j: int) -> str:
@@ -63,6 +67,10 @@ def pile(i: int) -> str:
 def pile_tag(i: int) -> int:
     """Cell tag of pile ``i`` (1-based)."""
     return 100 + i
+
+
+#: Cell tags of piles 1 .. MAX_PILES.
+PILE_TAGS = range(pile_tag(1), pile_tag(MAX_PILES) + 1)
 
 
 def shaft(i: int, j: int) -> str:
@@ -105,15 +113,10 @@ def embed_tag(i: int) -> int:
     return 700 + i
 
 
-def _numbers(pattern: re.Pattern[str], name: str) -> tuple[int, ...] | None:
-    """The integers captured by ``pattern`` in ``name``, or ``None`` when it does not match."""
-    m = pattern.match(name)
-    return tuple(int(g) for g in m.groups()) if m else None
-
-
 def _number(pattern: re.Pattern[str], name: str) -> int | None:
-    found = _numbers(pattern, name)
-    return found[0] if found else None
+    """The number a one-number group-name ``pattern`` reads from ``name``, else ``None``."""
+    m = pattern.match(name)
+    return int(m.group(1)) if m else None
 
 
 def layer_of(name: str) -> int | None:
@@ -133,8 +136,8 @@ def is_structure(name: str) -> bool:
 
 def shaft_of(name: str) -> tuple[int, int] | None:
     """(pile, layer) of a ``shaft_p{i}_l{jj}`` facet group, else ``None``."""
-    found = _numbers(_SHAFT, name)
-    return (found[0], found[1]) if found else None
+    m = _SHAFT.match(name)
+    return (int(m.group(1)), int(m.group(2))) if m else None
 
 
 def base_of(name: str) -> int | None:
@@ -142,16 +145,42 @@ def base_of(name: str) -> int | None:
     return _number(_BASE, name)
 
 
-def head_of(name: str) -> int | None:
-    """Pile of a ``head_p{i}`` facet group, else ``None``."""
-    return _number(_HEAD, name)
-
-
 def is_interface(name: str) -> bool:
     """A pile-soil interface facet group (a shaft or a base)."""
     return shaft_of(name) is not None or base_of(name) is not None
 
 
+def head_of(name: str) -> int | None:
+    """Pile of a ``head_p{i}`` facet group, else ``None``."""
+    return _number(_HEAD, name)
+
+
 def heads(names: Iterable[str]) -> list[str]:
     """The pile-head facet groups among ``names`` (in the given order)."""
     return [n for n in names if head_of(n) is not None]
+
+
+def embed_of(name: str) -> int | None:
+    """Pile of an ``embed_p{i}`` facet group, else ``None``."""
+    return _number(_EMBED, name)
+
+
+#: Tag function of every group family numbered by one pile or layer, by its parser.
+_NUMBERED = ((layer_of, soil_layer_tag), (pile_of, pile_tag), (base_of, base_tag),
+             (head_of, head_tag), (embed_of, embed_tag))
+
+
+def tag_of(name: str) -> int:
+    """Tag value of the group ``name`` (module docstring table); ``ValueError`` if unknown."""
+    if name == CAP:
+        return CAP_TAG
+    if name in FACET_TAGS:
+        return FACET_TAGS[name]
+    pile_layer = shaft_of(name)
+    if pile_layer is not None:
+        return shaft_tag(*pile_layer)
+    for parse, tag in _NUMBERED:
+        k = parse(name)
+        if k is not None:
+            return tag(k)
+    raise ValueError(f"{name!r} is not a mesh group name")

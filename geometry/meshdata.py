@@ -3,7 +3,10 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:  # annotations only: no dolfinx import at run time
+    from dolfinx.mesh import Mesh, MeshTags
 
 
 @dataclass(frozen=True)
@@ -21,9 +24,9 @@ class MeshData:
         info: free-form provenance (sizes, timings, cache key) for summaries.
     """
 
-    mesh: Any
-    cell_tags: Any
-    facet_tags: Any
+    mesh: Mesh
+    cell_tags: MeshTags
+    facet_tags: MeshTags
     cell_names: dict[str, int]
     facet_names: dict[str, int]
     info: dict[str, Any] = field(default_factory=dict)

@@ -11,9 +11,14 @@ import time
 from pathlib import Path
 from typing import Any
 
+import gmsh
 import numpy as np
+import pyvista as pv
+from dolfinx.io import XDMFFile
+from mpi4py import MPI
 
 from pilegroup.geometry.convert import build_mesh, ensure_msh, gmsh_session
+from pilegroup.geometry.groups import CAP_TAG, PILE_TAGS, shaft_of
 from pilegroup.geometry.meshdata import MeshData
 from pilegroup.geometry.spec import GeometrySpec
 
@@ -25,8 +30,6 @@ def write_xdmf(md: MeshData, path: str | Path) -> Path:
 
     The name -> tag tables go to ``<path>.tags.json`` (written by rank 0).
     """
-    from dolfinx.io import XDMFFile
-
     path = Path(path)
     mesh = md.mesh
     comm = mesh.comm
@@ -47,22 +50,20 @@ def write_xdmf(md: MeshData, path: str | Path) -> Path:
     return path
 
 
-def hex_grid(points: np.ndarray, hexes: np.ndarray) -> Any:
+def hex_grid(points: np.ndarray, hexes: np.ndarray) -> pv.UnstructuredGrid:
     """A pyvista grid of linear hexahedra: ``points`` (n, 3) in m, ``hexes`` (m, 8) indices.
 
     Vertex order of each hexahedron as in VTK (gmsh's and DOLFINx's XDMF order are the same).
     """
-    import pyvista as pv
-
     hexes = np.asarray(hexes, dtype=np.int64).reshape(-1, 8)
     cells = np.hstack([np.full((hexes.shape[0], 1), 8), hexes]).ravel()
     return pv.UnstructuredGrid(cells, np.full(hexes.shape[0], pv.CellType.HEXAHEDRON),
                                np.asarray(points, dtype=float).reshape(-1, 3))
 
 
-def _grid_from_msh(msh: Path) -> Any:
+def _grid_from_msh(msh: Path) -> pv.UnstructuredGrid:
     """A pyvista grid of the hexahedra in ``msh`` with cell data ``region`` (physical tag)."""
-    with gmsh_session() as gmsh:
+    with gmsh_session():
         gmsh.open(str(msh))
         tags, xyz, _ = gmsh.model.mesh.getNodes()
         order = np.argsort(tags)
@@ -85,8 +86,8 @@ def _grid_from_msh(msh: Path) -> Any:
 def _region_colors(region: np.ndarray) -> np.ndarray:
     """Scalar for colouring: soil layers 1..n, piles and cap mapped to distinct values."""
     out = region.astype(float).copy()
-    out[(region > 100) & (region < 300)] = -5.0  # piles
-    out[region == 300] = -10.0  # cap
+    out[np.isin(region, PILE_TAGS)] = -5.0
+    out[region == CAP_TAG] = -10.0
     return out
 
 
@@ -95,8 +96,6 @@ def render_png(msh: str | Path, spec: GeometrySpec, out_dir: str | Path) -> list
 
     Serial (call it on one rank); pyvista off screen, no display needed.
     """
-    import pyvista as pv
-
     pv.OFF_SCREEN = True
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
@@ -144,7 +143,7 @@ def render_png(msh: str | Path, spec: GeometrySpec, out_dir: str | Path) -> list
     return files
 
 
-def mesh_command(spec: GeometrySpec, h: float | None, out_dir: str | Path, comm: Any,
+def mesh_command(spec: GeometrySpec, h: float | None, out_dir: str | Path, comm: MPI.Comm,
                  cache_dir: str | Path | None = None, render: bool = True) -> dict[str, Any]:
     """Mesh ``spec`` (with ``h`` in m if given), write XDMF + PNG to ``out_dir``, return a summary.
 
@@ -172,7 +171,7 @@ def mesh_command(spec: GeometrySpec, h: float | None, out_dir: str | Path, comm:
         "vertical_divisions_cap": info["n_vertical_cap"],
         "cell_groups": len(md.cell_names),
         "facet_groups": len(md.facet_names),
-        "shaft_groups": sum(1 for n in md.facet_names if n.startswith("shaft_")),
+        "shaft_groups": sum(1 for n in md.facet_names if shaft_of(n) is not None),
         "cache_hit": info["cache_hit"],
         "cache_key": info["cache_key"] if "cache_key" in info else None,
         "timings_s": info["timings"],

@@ -6,8 +6,8 @@ points up, the soil occupies ``-depth <= z <= 0`` and the cap sits on the ground
 (``0 <= z <= cap.thickness``). A pile with ``length_in_soil = L`` and ``embedment = e`` spans
 ``-L <= z <= e`` (its top ``e`` metres lie inside the cap).
 
-The lead's adapter turns a scenario into a :class:`GeometrySpec`; :func:`pier667_default` and
-:func:`single_pile` build specs directly for tests and benchmarks.
+:func:`pilegroup.geometry.adapter.geometry_spec` turns a scenario into a :class:`GeometrySpec`;
+:func:`pier667_default` and :func:`single_pile` build specs directly for tests and benchmarks.
 """
 
 from __future__ import annotations
@@ -19,6 +19,7 @@ from dataclasses import asdict, dataclass, field, replace
 from typing import Any
 
 from pilegroup.errors import ScenarioError
+from pilegroup.geometry.groups import MAX_LAYERS, MAX_PILES
 from pilegroup.validate import (
     require_finite,
     require_in_range,
@@ -74,7 +75,8 @@ class LayerSpec:
     """A horizontal soil layer, listed from the ground surface down.
 
     Attributes:
-        name: free text (e.g. ``"Mud"``); the physical group is ``soil_layer_{index:02d}``.
+        name: free text (e.g. ``"Mud"``); the cell group is :func:`~.groups.soil_layer` of the
+            layer's 1-based index.
         thickness: m; ``None`` only for the last layer, which then extends to the block bottom.
         dz_max: optional cap (m) on the vertical element size inside this layer.
     """
@@ -224,8 +226,8 @@ class GeometrySpec:
     def _check_layers(self) -> None:
         if not self.layers:
             raise ScenarioError("layers", [], "must list at least one layer")
-        if len(self.layers) > 99:
-            raise ScenarioError("layers", len(self.layers), "at most 99 layers", "-")
+        if len(self.layers) > MAX_LAYERS:
+            raise ScenarioError("layers", len(self.layers), f"at most {MAX_LAYERS} layers", "-")
         for j, lay in enumerate(self.layers[:-1]):
             if lay.thickness is None:
                 raise ScenarioError(f"layers[{j}].thickness", None,
@@ -251,8 +253,8 @@ class GeometrySpec:
         b = self.block
         if not self.piles:
             raise ScenarioError("piles", [], "must list at least one pile")
-        if len(self.piles) > 99:
-            raise ScenarioError("piles", len(self.piles), "at most 99 piles", "-")
+        if len(self.piles) > MAX_PILES:
+            raise ScenarioError("piles", len(self.piles), f"at most {MAX_PILES} piles", "-")
         for i, p in enumerate(self.piles):
             if p.length_in_soil >= b.depth * (1 - _REL):
                 raise ScenarioError(f"piles[{i}].length_in_soil", p.length_in_soil,
@@ -329,7 +331,7 @@ class GeometrySpec:
         return hashlib.sha256(payload.encode()).hexdigest()[:20]
 
     @classmethod
-    def pier667_default(cls, h: float = 1.0, **sizing: Any) -> GeometrySpec:
+    def pier667_default(cls, h: float = 1.0, **sizing: float) -> GeometrySpec:
         """Shorthand for :func:`pier667_default`."""
         return pier667_default(h, **sizing)
 
@@ -345,7 +347,7 @@ def grid_piles(nx: int, ny: int, sx: float, sy: float, diameter: float, length_i
                  for j in range(ny) for i in range(nx))
 
 
-def pier667_default(h: float = 1.0, **sizing: Any) -> GeometrySpec:
+def pier667_default(h: float = 1.0, **sizing: float) -> GeometrySpec:
     """Pier 667 (paper Section 5, Table 1): 101 x 75 x 128 m block, Table-1 layers, 3 x 3 piles.
 
     Piles: d = 1.0 m, 63.5 m in soil, 1.0 m embedded in a 10.1 x 7.4 x 2.5 m cap. ASSUMPTION
@@ -367,7 +369,7 @@ def pier667_default(h: float = 1.0, **sizing: Any) -> GeometrySpec:
 #: (cross-section area within 0.84 % of pi d^2/4), far field growing to 16 m, element layers
 #: from 1 m at the surface and the toes to 6 m (15 m below the toes): 66,294 hexahedra at
 #: h = 1 m (the paper's coarsest mesh: 57,108), so that the 317-day run fits the time budget.
-PIER667_SIZING: dict[str, Any] = {
+PIER667_SIZING: dict[str, float] = {
     "n_circ_min": 28, "h_far": 16.0, "growth": 1.6, "dz_surface": 1.0, "dz_toe": 1.0,
     "dz_max": 6.0, "dz_max_deep": 15.0, "dz_growth": 1.4, "dz_cap": 1.5,
 }
@@ -375,7 +377,7 @@ PIER667_SIZING: dict[str, Any] = {
 
 def single_pile(diameter: float = 1.0, length_in_soil: float = 10.0, size_x: float = 20.0,
                 size_y: float | None = None, depth: float = 20.0, h: float = 0.5,
-                layer_name: str = "soil", **sizing: Any) -> GeometrySpec:
+                layer_name: str = "soil", **sizing: float) -> GeometrySpec:
     """One pile at the origin in one homogeneous layer, no cap (head on the ground surface).
 
     Lengths in m; ``sizing`` overrides :class:`MeshSizing` fields (e.g. ``h_far``).

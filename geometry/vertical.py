@@ -15,6 +15,7 @@ equal increments of that integral, which gives smooth geometric-like grading.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -24,6 +25,9 @@ from pilegroup.geometry.spec import GeometrySpec
 __all__ = ["Segment", "vertical_segments"]
 
 _TOL = 1e-9
+
+#: Vertical element size (m) as a function of the level z (m).
+SizeFunction = Callable[[np.ndarray], np.ndarray]
 
 
 @dataclass(frozen=True)
@@ -63,7 +67,7 @@ def _unique_sorted_desc(values: list[float], scale: float) -> list[float]:
     return out
 
 
-def _size_function(spec: GeometrySpec):
+def _size_function(spec: GeometrySpec) -> SizeFunction:
     s = spec.sizing
     foci = [(0.0, s.dz_surface)] + [(-p.length_in_soil, s.dz_toe) for p in spec.piles]
     z_deepest = min(-p.length_in_soil for p in spec.piles)
@@ -85,7 +89,7 @@ def _size_function(spec: GeometrySpec):
     return dz
 
 
-def _graded(z0: float, z1: float, dz, n_min: int) -> tuple[float, ...]:
+def _graded(z0: float, z1: float, dz: SizeFunction, n_min: int) -> tuple[float, ...]:
     """Cumulative height fractions from z0 towards z1 following the size function dz."""
     length = abs(z1 - z0)
     s = np.linspace(0.0, length, 4001)

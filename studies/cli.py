@@ -14,12 +14,40 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
+from pilegroup.fileio import write_text_atomic
 from pilegroup.model import BUNDLED, PilegroupError, ScenarioError, bundled_text, load_scenario
 
 log = logging.getLogger("pilegroup")
 
 EXIT_INPUT = 2
 EXIT_FAILED = 1
+SCENARIO_HELP = "scenario TOML file or bundled name, e.g. pier667"
+
+#: Descriptions of the sub-commands (``pilegroup COMMAND --help``).
+DESCRIPTIONS = {
+    "scenario": "Show a bundled scenario or validate a scenario file.",
+    "run": ("Validate the scenario, build its mesh and run every stage that is implemented; write "
+            "outputs and summary.json to --out."),
+    "mesh": ("Mesh the scenario with gmsh (cap, piles, layered soil; plan quads extruded through "
+             "the layers), write mesh.xdmf with cell and facet tags (ParaView), "
+             "mesh_summary.json, plan.png and cutaway.png, and print counts and quality. Meshes "
+             "are cached by their parameters ($PILEGROUP_MESH_CACHE or "
+             "~/.cache/pilegroup/meshes)."),
+    "verify": ("Run verification cases through the real pipeline and print error, tolerance and "
+               "pass/fail per case (exit 1 if any fails). Cases: terzaghi (1D consolidation), "
+               "mandel (Mandel-Cryer effect), triaxial (Mohr-Coulomb failure load), "
+               "shaft-capacity (pile pushed to shaft failure), interface-patch (solver interface "
+               "vs pointwise law), tied-limit (stiff interface vs tied pile). Works under "
+               "mpirun -n 2."),
+    "bench": ("constitutive: law updates per second; meshing: cells, quality and time for the "
+              "paper's five mesh sizes; verification: run time against error for Terzaghi and "
+              "Mandel (table, JSON and PNG)."),
+    "report": ("Read the CSV and JSON files of a finished or interrupted run (settlement.csv, "
+               "pile_profiles.csv, layer_history.csv, pile_loads.csv, summary.json), write PNG "
+               "figures to OUT_DIR/plots (figures whose file is missing are skipped) and, with "
+               "--markdown, a results section. A CSV with a wrong header is invalid input "
+               "(exit 2)."),
+}
 
 
 def _world_rank() -> int:
@@ -52,6 +80,21 @@ def _cmd_scenario_validate(args: argparse.Namespace) -> int:
     return 0
 
 
+def _scenario_arguments(p: argparse.ArgumentParser) -> None:
+    ssub = p.add_subparsers(dest="action", required=True, metavar="ACTION")
+    show = ssub.add_parser("show", help="print a bundled scenario (TOML, with its comments)",
+                           description="Print a bundled scenario; copy it to start your own.")
+    show.add_argument("name", nargs="?", default="pier667", choices=BUNDLED,
+                      help="bundled scenario name (default: pier667)")
+    show.set_defaults(func=_cmd_scenario_show)
+    val = ssub.add_parser("validate", help="check a scenario file and report the first problem",
+                          description="Check a scenario TOML file: unknown, missing or mistyped "
+                          "keys and out-of-range values are reported with the key, the value, "
+                          "its unit and what is allowed (exit code 2).")
+    val.add_argument("file", help="scenario TOML file (or a bundled name)")
+    val.set_defaults(func=_cmd_scenario_validate)
+
+
 def _cmd_run(args: argparse.Namespace) -> int:
     from pilegroup.studies.run import run_scenario
 
@@ -61,6 +104,17 @@ def _cmd_run(args: argparse.Namespace) -> int:
     if _world_rank() == 0:
         print(json.dumps(summary, indent=2))
     return 0
+
+
+def _run_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("scenario", help=SCENARIO_HELP)
+    p.add_argument("--out", help="output folder (default: out/<scenario name>)")
+    p.add_argument("--mesh-size", type=float, default=None, metavar="H",
+                   help="element size at the pile surfaces in m (overrides numerics.mesh.size_m)")
+    p.add_argument("--stop-after", choices=["mesh", "solve"], default="solve",
+                   help="mesh: validate and mesh only (writes scenario.json, mesh/ and "
+                   "summary.json); solve (default): run every stage")
+    p.set_defaults(func=_cmd_run)
 
 
 def _cmd_mesh(args: argparse.Namespace) -> int:
@@ -78,6 +132,16 @@ def _cmd_mesh(args: argparse.Namespace) -> int:
     return 0
 
 
+def _mesh_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("scenario", help=SCENARIO_HELP)
+    p.add_argument("--mesh-size", type=float, default=None, metavar="H",
+                   help="element size at the pile surfaces in m (paper: 1.0/0.8/0.6/0.3/0.1)")
+    p.add_argument("--out", help="output folder (default: out/<scenario>/mesh)")
+    p.add_argument("--no-cache", action="store_true", help="re-mesh even if cached")
+    p.add_argument("--no-png", action="store_true", help="skip the PNG renders")
+    p.set_defaults(func=_cmd_mesh)
+
+
 def _cmd_verify(args: argparse.Namespace) -> int:
     from pilegroup.studies.verification import CASES, run_cases
 
@@ -87,6 +151,21 @@ def _cmd_verify(args: argparse.Namespace) -> int:
     res = run_cases(args.cases, size=args.size, json=args.json, pair=args.pair,
                     preset=args.preset, quadrature=args.interface_quadrature)
     return 0 if all(r.passed for r in res) else EXIT_FAILED
+
+
+def _verify_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("cases", nargs="*", metavar="CASE", help="cases to run (default: all)")
+    p.add_argument("--json", action="store_true", help="one JSON object per case")
+    p.add_argument("--size", choices=["fast", "bench"], default="fast",
+                   help="fast: small meshes (test tier); bench: benchmark sizes")
+    p.add_argument("--pair", choices=["Q2Q1", "Q1Q1"], default=None,
+                   help="element pair (default: each case's own)")
+    p.add_argument("--preset", choices=["direct", "fieldsplit_gamg"], default=None,
+                   help="linear solver option set (default: each case's own)")
+    p.add_argument("--interface-quadrature", choices=["nodal", "gauss"], default=None,
+                   help="interface cases: law at the interface nodes or at facet Gauss "
+                   "points (default: nodal)")
+    p.set_defaults(func=_cmd_verify)
 
 
 def _cmd_bench(args: argparse.Namespace) -> int:
@@ -104,8 +183,15 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     return 0
 
 
+def _bench_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("what", choices=["constitutive", "meshing", "verification"])
+    p.add_argument("--sizes", type=float, nargs="*", default=None, metavar="H",
+                   help="meshing: pile-surface sizes in m (default: the paper's five)")
+    p.add_argument("--out", default=None, help="verification: output folder")
+    p.set_defaults(func=_cmd_bench)
+
+
 def _cmd_report(args: argparse.Namespace) -> int:
-    from pilegroup.fileio import write_text_atomic
     from pilegroup.studies.report import results_markdown, write_report
 
     out = Path(args.out_dir)
@@ -117,6 +203,14 @@ def _cmd_report(args: argparse.Namespace) -> int:
         rel = Path(os.path.relpath(out / "plots", md.parent)).as_posix()
         print(write_text_atomic(md, results_markdown(out, rel)))
     return 0
+
+
+def _report_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("out_dir", metavar="OUT_DIR", help="run output folder, e.g. out/pier667")
+    p.add_argument("--markdown", metavar="FILE", default=None,
+                   help="also write the results section (Markdown) to FILE; image links are "
+                   "relative to FILE's folder")
+    p.set_defaults(func=_cmd_report)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -132,89 +226,15 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument("-v", "--verbose", action="count", default=0, help="more log output")
     sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
-
-    ps = sub.add_parser("scenario", help="show or validate scenario files",
-                        description="Show a bundled scenario or validate a scenario file.")
-    ssub = ps.add_subparsers(dest="action", required=True, metavar="ACTION")
-    show = ssub.add_parser("show", help="print a bundled scenario (TOML, with its comments)",
-                           description="Print a bundled scenario; copy it to start your own.")
-    show.add_argument("name", nargs="?", default="pier667", choices=BUNDLED,
-                      help="bundled scenario name (default: pier667)")
-    show.set_defaults(func=_cmd_scenario_show)
-    val = ssub.add_parser("validate", help="check a scenario file and report the first problem",
-                          description="Check a scenario TOML file: unknown, missing or mistyped "
-                          "keys and out-of-range values are reported with the key, the value, "
-                          "its unit and what is allowed (exit code 2).")
-    val.add_argument("file", help="scenario TOML file (or a bundled name)")
-    val.set_defaults(func=_cmd_scenario_validate)
-
-    pr = sub.add_parser("run", help="run a scenario (main job)",
-                        description="Validate the scenario, build its mesh and run every stage "
-                        "that is implemented; write outputs and summary.json to --out.")
-    pr.add_argument("scenario", help="scenario TOML file or bundled name, e.g. pier667")
-    pr.add_argument("--out", help="output folder (default: out/<scenario name>)")
-    pr.add_argument("--mesh-size", type=float, default=None, metavar="H",
-                    help="element size at the pile surfaces in m (overrides numerics.mesh.size_m)")
-    pr.add_argument("--stop-after", choices=["mesh", "solve"], default="solve",
-                    help="mesh: validate and mesh only (writes scenario.json, mesh/ and "
-                    "summary.json); solve (default): run every stage")
-    pr.set_defaults(func=_cmd_run)
-
-    pm = sub.add_parser("mesh", help="build the all-hexahedral mesh of a scenario",
-                        description="Mesh the scenario with gmsh (cap, piles, layered soil; "
-                        "plan quads extruded through the layers), write mesh.xdmf with cell and "
-                        "facet tags (ParaView), mesh_summary.json, plan.png and cutaway.png, and "
-                        "print counts and quality. Meshes are cached by their parameters "
-                        "($PILEGROUP_MESH_CACHE or ~/.cache/pilegroup/meshes).")
-    pm.add_argument("scenario", help="scenario TOML file or bundled name, e.g. pier667")
-    pm.add_argument("--mesh-size", type=float, default=None, metavar="H",
-                    help="element size at the pile surfaces in m (paper: 1.0/0.8/0.6/0.3/0.1)")
-    pm.add_argument("--out", help="output folder (default: out/<scenario>/mesh)")
-    pm.add_argument("--no-cache", action="store_true", help="re-mesh even if cached")
-    pm.add_argument("--no-png", action="store_true", help="skip the PNG renders")
-    pm.set_defaults(func=_cmd_mesh)
-
-    pv = sub.add_parser("verify", help="run verification cases against closed forms",
-                        description="Run verification cases through the real pipeline and "
-                        "print error, tolerance and pass/fail per case (exit 1 if any fails). "
-                        "Cases: terzaghi (1D consolidation), mandel (Mandel-Cryer effect), "
-                        "triaxial (Mohr-Coulomb failure load), shaft-capacity (pile pushed to "
-                        "shaft failure), interface-patch (solver interface vs pointwise law), "
-                        "tied-limit (stiff interface vs tied pile). Works under mpirun -n 2.")
-    pv.add_argument("cases", nargs="*", metavar="CASE", help="cases to run (default: all)")
-    pv.add_argument("--json", action="store_true", help="one JSON object per case")
-    pv.add_argument("--size", choices=["fast", "bench"], default="fast",
-                    help="fast: small meshes (test tier); bench: benchmark sizes")
-    pv.add_argument("--pair", choices=["Q2Q1", "Q1Q1"], default=None,
-                    help="element pair (default: each case's own)")
-    pv.add_argument("--preset", choices=["direct", "fieldsplit_gamg"], default=None,
-                    help="linear solver option set (default: each case's own)")
-    pv.add_argument("--interface-quadrature", choices=["nodal", "gauss"], default=None,
-                    help="interface cases: law at the interface nodes or at facet Gauss "
-                    "points (default: nodal)")
-    pv.set_defaults(func=_cmd_verify)
-
-    pb = sub.add_parser("bench", help="benchmarks that print tables (not tests)",
-                        description="constitutive: law updates per second; meshing: cells, "
-                        "quality and time for the paper's five mesh sizes; verification: run "
-                        "time against error for Terzaghi and Mandel (table, JSON and PNG).")
-    pb.add_argument("what", choices=["constitutive", "meshing", "verification"])
-    pb.add_argument("--sizes", type=float, nargs="*", default=None, metavar="H",
-                    help="meshing: pile-surface sizes in m (default: the paper's five)")
-    pb.add_argument("--out", default=None, help="verification: output folder")
-    pb.set_defaults(func=_cmd_bench)
-
-    pp = sub.add_parser("report", help="plots and a Markdown summary of a run's output folder",
-                        description="Read the CSV and JSON files of a finished or interrupted "
-                        "run (settlement.csv, pile_profiles.csv, layer_history.csv, "
-                        "pile_loads.csv, summary.json), write PNG figures to OUT_DIR/plots "
-                        "(figures whose file is missing are skipped) and, with --markdown, a "
-                        "results section. A CSV with a wrong header is invalid input (exit 2).")
-    pp.add_argument("out_dir", metavar="OUT_DIR", help="run output folder, e.g. out/pier667")
-    pp.add_argument("--markdown", metavar="FILE", default=None,
-                    help="also write the results section (Markdown) to FILE; image links are "
-                    "relative to FILE's folder")
-    pp.set_defaults(func=_cmd_report)
+    for name, help_, add_arguments in (
+        ("scenario", "show or validate scenario files", _scenario_arguments),
+        ("run", "run a scenario (main job)", _run_arguments),
+        ("mesh", "build the all-hexahedral mesh of a scenario", _mesh_arguments),
+        ("verify", "run verification cases against closed forms", _verify_arguments),
+        ("bench", "benchmarks that print tables (not tests)", _bench_arguments),
+        ("report", "plots and a Markdown summary of a run's output folder", _report_arguments),
+    ):
+        add_arguments(sub.add_parser(name, help=help_, description=DESCRIPTIONS[name]))
     return p
 
 

@@ -38,12 +38,7 @@ from pilegroup.fileio import write_text_atomic
 from pilegroup.geometry import groups
 from pilegroup.model import Scenario
 from pilegroup.solver import BiotProblem
-
-PROFILE_COLUMNS = ("t_day,pile,depth_m,layer,axial_force_kN,shaft_friction_kPa,"
-                   "relative_displacement_m")
-LAYER_COLUMNS = ("t_day,pile,layer,layer_name,depth_top_m,depth_bottom_m,shaft_friction_kPa,"
-                 "relative_displacement_m,viscoplastic_slip_m,normal_traction_kPa")
-LOAD_COLUMNS = "t_day,pile,x_m,y_m,head_force_kN"
+from pilegroup.studies.tables import LAYER_COLUMNS, LOAD_COLUMNS, PROFILE_COLUMNS
 
 
 def _sum(comm: MPI.Comm, a: np.ndarray) -> np.ndarray:

@@ -20,14 +20,14 @@ from __future__ import annotations
 
 import dataclasses
 import logging
-import os
-import tempfile
 import xml.etree.ElementTree as ET
 from pathlib import Path
-from typing import Any
 
+import h5py
 import numpy as np
+import pyvista as pv
 
+from pilegroup.fileio import atomic_path
 from pilegroup.geometry.output import hex_grid
 
 log = logging.getLogger(__name__)
@@ -51,8 +51,8 @@ class ViewData:
     """
 
     t_day: float
-    soil: Any
-    structure: Any | None
+    soil: pv.UnstructuredGrid
+    structure: pv.UnstructuredGrid | None
 
 
 def _xdmf(path: Path) -> tuple[str, str, dict[str, dict[float, str]]]:
@@ -79,21 +79,22 @@ def _xdmf(path: Path) -> tuple[str, str, dict[str, dict[float, str]]]:
 
 def _h5(xdmf: Path, ref: str) -> np.ndarray:
     """The array of an XDMF ``"file.h5:/dataset"`` reference (file relative to the XDMF)."""
-    import h5py
-
     fname, _, dataset = ref.rpartition(":")
     with h5py.File(xdmf.parent / fname, "r") as f:
         return np.asarray(f[dataset][...])
 
 
-def _displacement(series: dict[str, dict[float, str]], path: Path) -> tuple[str, dict]:
+def _displacement(series: dict[str, dict[float, str]], path: Path
+                  ) -> tuple[str, dict[float, str]]:
+    """The first displacement series of an XDMF file: its name and ``{t: ref}``."""
     names = [n for n in series if n.startswith("displacement")]
     if not names:
         raise ViewDataError(f"{path.name} holds no displacement")
     return names[0], series[names[0]]
 
 
-def _grid(path: Path, geometry: str, topology: str, u_ref: str | None) -> Any:
+def _grid(path: Path, geometry: str, topology: str, u_ref: str | None
+          ) -> pv.UnstructuredGrid:
     """Hexahedral grid of one XDMF mesh, with ``settlement_mm`` from ``u_ref`` if given."""
     grid = hex_grid(_h5(path, geometry), _h5(path, topology))
     if u_ref is not None:
@@ -102,7 +103,7 @@ def _grid(path: Path, geometry: str, topology: str, u_ref: str | None) -> Any:
     return grid
 
 
-def _centres(grid: Any) -> np.ndarray:
+def _centres(grid: pv.UnstructuredGrid) -> np.ndarray:
     """Cell centres (vertex means) of a hexahedral grid, m."""
     return grid.points[grid.cell_connectivity.reshape(-1, 8)].mean(axis=1)
 
@@ -160,8 +161,6 @@ def render_view3d(data: ViewData, path: Path, title: str) -> Path:
     looks into it from above. Piles and cap are drawn whole, with their mesh edges. Colours:
     settlement in mm, down positive, one scale for all; the black box outlines the soil shown.
     """
-    import pyvista as pv
-
     pv.OFF_SCREEN = True
     soil, struct = data.soil, data.structure
     x0, x1, y0, y1, z0, ground = soil.bounds
@@ -201,15 +200,9 @@ def render_view3d(data: ViewData, path: Path, title: str) -> Path:
     p.add_axes(color="black")
     p.view_vector((1.0, -1.3, 0.8), viewup=(0.0, 0.0, 1.0))
     p.reset_camera()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=".png", dir=path.parent)
-    os.close(fd)
     try:
-        p.screenshot(tmp)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+        with atomic_path(path) as tmp:
+            p.screenshot(str(tmp))
     finally:
         p.close()
     return path

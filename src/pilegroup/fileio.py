@@ -1,6 +1,7 @@
 """Small file helpers shared by every layer.
 
-Atomic writes, so that an interrupted run never leaves a half-written JSON or CSV behind.
+Atomic writes, so that an interrupted run never leaves a half-written JSON, CSV, mesh or
+picture behind: the file is written under a temporary name in the same folder and renamed.
 """
 
 from __future__ import annotations
@@ -9,6 +10,8 @@ import dataclasses
 import json
 import os
 import tempfile
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -22,18 +25,30 @@ def json_default(obj: Any) -> Any:
     return str(obj)
 
 
+@contextmanager
+def atomic_path(path: str | Path) -> Iterator[Path]:
+    """A temporary path to write ``path`` to; it replaces ``path`` when the block succeeds.
+
+    The temporary file lies in the same folder (created if needed) and keeps the suffix of
+    ``path``, so that writers that choose the format by the suffix (gmsh, pyvista) still do.
+    If the block raises, the temporary file is removed and ``path`` is left as it was.
+    """
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=path.suffix, dir=path.parent)
+    os.close(fd)
+    try:
+        yield Path(tmp)
+        os.replace(tmp, path)
+    finally:
+        Path(tmp).unlink(missing_ok=True)
+
+
 def write_text_atomic(path: str | Path, text: str) -> Path:
     """Write ``text`` to ``path`` through a temporary file and an atomic rename."""
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write(text)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    with atomic_path(path) as tmp:
+        tmp.write_text(text, encoding="utf-8")
     return path
 
 

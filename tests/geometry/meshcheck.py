@@ -12,7 +12,23 @@ import sys
 
 import numpy as np
 
-import pilegroup  # noqa: F401  (dolfinx_solver before dolfinx)
+import pilegroup  # noqa: F401  (dolfinx_solver before dolfinx: keep it first when run as a script)
+
+# isort: split
+import dolfinx
+from mpi4py import MPI
+
+from pilegroup.geometry.convert import build_mesh
+from pilegroup.geometry.groups import tag_of
+from pilegroup.geometry.spec import (
+    BlockSpec,
+    CapSpec,
+    GeometrySpec,
+    LayerSpec,
+    MeshSizing,
+    grid_piles,
+    pier667_default,
+)
 
 # corners of the reference hexahedron in DOLFINx (tensor-product) vertex order
 _REF = np.array([[i, j, k] for k in (0, 1) for j in (0, 1) for i in (0, 1)], dtype=float)
@@ -65,8 +81,6 @@ def min_scaled_jacobian(x):
 
 def facet_areas(mesh, facets):
     """Areas of planar quadrilateral facets (half the cross product of the diagonals)."""
-    import dolfinx
-
     if len(facets) == 0:
         return np.zeros(0)
     geo = dolfinx.mesh.entities_to_geometry(mesh, 2, np.asarray(facets, dtype=np.int32))
@@ -79,7 +93,12 @@ def owned_facets(mesh, facets):
 
 
 def group_measures(md):
-    """Global volume per cell group and area per facet group, counts and tag sums."""
+    """Global volume per cell group and area per facet group, counts and tag sums.
+
+    Asserts first that every group's name and tag follow :mod:`pilegroup.geometry.groups`.
+    """
+    for name, tag in [*md.cell_names.items(), *md.facet_names.items()]:
+        assert tag_of(name) == tag, (name, tag)
     mesh = md.mesh
     comm = mesh.comm
     mesh.topology.create_connectivity(2, 3)
@@ -108,15 +127,6 @@ def group_measures(md):
 
 def mini_pier(h=0.5):
     """A small 2 x 2 pile group with cap in three layers (fast, used for MPI)."""
-    from pilegroup.geometry.spec import (
-        BlockSpec,
-        CapSpec,
-        GeometrySpec,
-        LayerSpec,
-        MeshSizing,
-        grid_piles,
-    )
-
     return GeometrySpec(
         block=BlockSpec(24.0, 20.0, 20.0),
         layers=(LayerSpec("a", 1.0), LayerSpec("b", 6.0), LayerSpec("c", None)),
@@ -127,11 +137,6 @@ def mini_pier(h=0.5):
 
 
 def main(argv):
-    from mpi4py import MPI
-
-    from pilegroup.geometry.convert import build_mesh
-    from pilegroup.geometry.spec import pier667_default
-
     which, h = argv[1], float(argv[2])
     spec = mini_pier(h) if which == "mini" else pier667_default(h)
     md = build_mesh(spec, MPI.COMM_WORLD, cache_dir=argv[3] if len(argv) > 3 else False)

@@ -3,7 +3,7 @@
 References are exact where the geometry makes them exact: a pile cross-section is the regular
 N-gon inscribed in its circle (N = circumferential divisions), every facet is a planar quad and
 every cell a straight prism, so volumes and areas must match to round-off (1e-9 relative). The
-issue's 1 % bounds against the true circle are checked as well.
+1 % bounds against the true circle are checked as well.
 """
 
 import importlib.util
@@ -13,10 +13,14 @@ import subprocess
 import sys
 from pathlib import Path
 
+import dolfinx
 import numpy as np
 import pytest
+from dolfinx.io import XDMFFile
+from dolfinx.mesh import CellType, exterior_facet_indices
 from mpi4py import MPI
 
+from pilegroup.geometry import groups
 from pilegroup.geometry.convert import build_mesh
 from pilegroup.geometry.output import mesh_command
 from pilegroup.geometry.spec import pier667_default, single_pile
@@ -65,8 +69,6 @@ def test_every_cell_has_exactly_one_tag(case):
 
 
 def test_only_hexahedra_and_scaled_jacobian(case):
-    from dolfinx.mesh import CellType
-
     _, md, _ = case
     assert md.mesh.topology.cell_type == CellType.hexahedron
     assert md.info["n_hex"] == md.info["num_cells"]
@@ -91,7 +93,7 @@ def test_volumes(case):
     errs = []
     for i, p in enumerate(spec.piles, start=1):
         length = p.length_in_soil + p.embedment
-        v = meas["cells"][f"pile_{i}"][1]
+        v = meas["cells"][groups.pile(i)][1]
         assert v == pytest.approx(poly_area(n, p.radius) * length, rel=REL)
         exact = math.pi * p.diameter**2 / 4 * length
         errs.append(abs(v - exact) / exact)
@@ -101,10 +103,10 @@ def test_volumes(case):
         piles = sum(poly_area(n, p.radius) * overlap(-p.length_in_soil, 0.0, zb, zt)
                     for p in spec.piles)
         expect = a_block * (zt - zb) - piles
-        assert meas["cells"][f"soil_layer_{j:02d}"][1] == pytest.approx(expect, rel=REL)
+        assert meas["cells"][groups.soil_layer(j)][1] == pytest.approx(expect, rel=REL)
     if spec.cap is not None:
         expect = vol_cap - sum(poly_area(n, p.radius) * p.embedment for p in spec.piles)
-        assert meas["cells"]["cap"][1] == pytest.approx(expect, rel=REL)
+        assert meas["cells"][groups.CAP][1] == pytest.approx(expect, rel=REL)
 
 
 def test_shaft_and_boundary_areas(case):
@@ -119,28 +121,29 @@ def test_shaft_and_boundary_areas(case):
             li = overlap(-p.length_in_soil, 0.0, zb, zt)
             if li == 0.0:
                 continue
-            name = f"shaft_p{i}_l{j:02d}"
+            name = groups.shaft(i, j)
             expected_shafts.add(name)
             assert f[name][1] == pytest.approx(poly_perimeter(n, p.radius) * li, rel=REL)
             assert abs(f[name][1] / (math.pi * p.diameter * li) - 1) < 0.01
-        assert f[f"base_p{i}"][1] == pytest.approx(poly_area(n, p.radius), rel=REL)
-    assert {k for k in f if k.startswith("shaft_")} == expected_shafts
-    assert f["side_xmin"][1] == pytest.approx(b.size_y * b.depth, rel=REL)
-    assert f["side_xmax"][1] == pytest.approx(b.size_y * b.depth, rel=REL)
-    assert f["side_ymin"][1] == pytest.approx(b.size_x * b.depth, rel=REL)
-    assert f["side_ymax"][1] == pytest.approx(b.size_x * b.depth, rel=REL)
-    assert f["bottom"][1] == pytest.approx(b.size_x * b.size_y, rel=REL)
+        assert f[groups.base(i)][1] == pytest.approx(poly_area(n, p.radius), rel=REL)
+    assert {k for k in f if groups.shaft_of(k)} == expected_shafts
+    xmin, xmax, ymin, ymax = groups.SIDES
+    assert f[xmin][1] == pytest.approx(b.size_y * b.depth, rel=REL)
+    assert f[xmax][1] == pytest.approx(b.size_y * b.depth, rel=REL)
+    assert f[ymin][1] == pytest.approx(b.size_x * b.depth, rel=REL)
+    assert f[ymax][1] == pytest.approx(b.size_x * b.depth, rel=REL)
+    assert f[groups.BOTTOM][1] == pytest.approx(b.size_x * b.size_y, rel=REL)
     a_piles = sum(poly_area(n, p.radius) for p in spec.piles)
     if spec.cap is None:
-        assert f["ground_surface"][1] == pytest.approx(b.size_x * b.size_y - a_piles, rel=REL)
+        assert f[groups.GROUND][1] == pytest.approx(b.size_x * b.size_y - a_piles, rel=REL)
     else:
         c = spec.cap
         a_cap = (c.x_max - c.x_min) * (c.y_max - c.y_min)
-        assert f["ground_surface"][1] == pytest.approx(b.size_x * b.size_y - a_cap, rel=REL)
-        assert f["cap_bottom"][1] == pytest.approx(a_cap - a_piles, rel=REL)
-        assert f["cap_top"][1] == pytest.approx(a_cap, rel=REL)
+        assert f[groups.GROUND][1] == pytest.approx(b.size_x * b.size_y - a_cap, rel=REL)
+        assert f[groups.CAP_BOTTOM][1] == pytest.approx(a_cap - a_piles, rel=REL)
+        assert f[groups.CAP_TOP][1] == pytest.approx(a_cap, rel=REL)
         per = 2 * (c.x_max - c.x_min + c.y_max - c.y_min)
-        assert f["cap_side"][1] == pytest.approx(per * c.thickness, rel=REL)
+        assert f[groups.CAP_SIDE][1] == pytest.approx(per * c.thickness, rel=REL)
 
 
 def _facet_cells(md):
@@ -154,16 +157,13 @@ def _facet_cells(md):
 def test_conforming_and_boundary_is_the_outer_surface(case):
     """No hanging nodes: each facet has <= 2 cells and the exterior facets are exactly the
     tagged outer-boundary facets whose area is the outer surface of block + cap."""
-    from dolfinx.mesh import exterior_facet_indices
-
     spec, md, meas = case
     mesh = md.mesh
     _, counts = _facet_cells(md)
     assert counts.max() <= 2
     ext = mc.owned_facets(mesh, exterior_facet_indices(mesh.topology))
-    boundary_groups = {"side_xmin", "side_xmax", "side_ymin", "side_ymax", "bottom",
-                       "ground_surface", "cap_top", "cap_side"}
-    boundary_groups |= {k for k in md.facet_names if k.startswith("head_p")}
+    boundary_groups = {*groups.SIDES, groups.BOTTOM, groups.GROUND, groups.CAP_TOP,
+                       groups.CAP_SIDE, *groups.heads(md.facet_names)}
     tags = [md.facet_names[k] for k in boundary_groups if k in md.facet_names]
     ft = md.facet_tags
     tagged = mc.owned_facets(mesh, ft.indices[np.isin(ft.values, tags)])
@@ -192,8 +192,6 @@ def test_layer_boundaries_planar_and_complete(case):
     n = md.info["n_circ"]
     for j in range(1, n_layers):
         between = inner[(t2.min(axis=1) == j) & (t2.max(axis=1) == j + 1)]
-        import dolfinx
-
         z = mesh.geometry.x[dolfinx.mesh.entities_to_geometry(mesh, 2, between)][..., 2]
         zb = spec.layer_bottoms()[j - 1]
         assert np.allclose(z, zb, rtol=0, atol=1e-9 * spec.block.depth)
@@ -210,15 +208,15 @@ def test_shaft_facets_join_pile_and_layer(case):
     tag_of_cell[md.cell_tags.indices] = md.cell_tags.values
     ft = md.facet_tags
     for name, tag in md.facet_names.items():
-        if not name.startswith("shaft_"):
+        if groups.shaft_of(name) is None:
             continue
-        i, j = int(name[7:name.index("_l")]), int(name[name.index("_l") + 2:])
+        i, j = groups.shaft_of(name)
         facets = ft.indices[ft.values == tag]
         assert np.all(counts[facets] == 2)
         pairs = np.sort(tag_of_cell[f2c.array[f2c.offsets[facets][:, None] + np.arange(2)]],
                         axis=1)
-        assert np.all(pairs == [md.cell_names[f"soil_layer_{j:02d}"],
-                                md.cell_names[f"pile_{i}"]])
+        assert np.all(pairs == [md.cell_names[groups.soil_layer(j)],
+                                md.cell_names[groups.pile(i)]])
 
 
 def test_cache_reuses_the_mesh(tmp_path):
@@ -240,7 +238,7 @@ def test_pile_volume_converges_with_h():
     for h in (0.5, 0.1, 0.05):
         spec = single_pile(h=h, size_x=10.0, depth=12.0, length_in_soil=6.0)
         md = build_mesh(spec, MPI.COMM_WORLD, cache_dir=False)
-        v = mc.group_measures(md)["cells"]["pile_1"][1]
+        v = mc.group_measures(md)["cells"][groups.pile(1)][1]
         errs.append(abs(v / (math.pi / 4 * 6.0) - 1))
     assert errs[0] < 0.01
     assert errs[1] <= errs[0] * (1 + 1e-12) and errs[2] <= errs[1]
@@ -251,7 +249,7 @@ def test_other_layouts_mesh(tmp_path):
     spec = mc.mini_pier(0.4)
     md = build_mesh(spec, MPI.COMM_WORLD, cache_dir=False)
     meas = mc.group_measures(md)
-    assert len([k for k in meas["facets"] if k.startswith("shaft_")]) == 4 * 3
+    assert len([k for k in meas["facets"] if groups.shaft_of(k)]) == 4 * 3
     assert md.info["min_sj"] > 0.2
 
 
@@ -265,8 +263,6 @@ def test_mesh_command_writes_xdmf_and_png(tmp_path):
         assert (out / name).stat().st_size > 0, name
     names = json.loads((out / "mesh.tags.json").read_text())
     assert "shaft_p1_l01" in names["facet_tags"] and "pile_1" in names["cell_tags"]
-    from dolfinx.io import XDMFFile
-
     with XDMFFile(MPI.COMM_WORLD, str(out / "mesh.xdmf"), "r") as f:
         mesh = f.read_mesh()
         mesh.topology.create_connectivity(2, 3)
@@ -303,8 +299,8 @@ def test_paper_sizes(h, cache):
     assert mc.min_scaled_jacobian(mc.cell_coords(md.mesh)).min() > 0.2
     for i, p in enumerate(spec.piles, start=1):
         exact = math.pi / 4 * p.diameter**2 * (p.length_in_soil + p.embedment)
-        assert abs(meas["cells"][f"pile_{i}"][1] / exact - 1) < 0.01
-    assert len([k for k in meas["facets"] if k.startswith("shaft_")]) == 81
+        assert abs(meas["cells"][groups.pile(i)][1] / exact - 1) < 0.01
+    assert len([k for k in meas["facets"] if groups.shaft_of(k)]) == 81
 
 
 @pytest.mark.slow
@@ -315,6 +311,6 @@ def test_paper_sizes_refine_monotonically(cache):
         meas = mc.group_measures(md)
         cells.append(md.info["num_cells"])
         exact = math.pi / 4 * 64.5
-        errs.append(max(abs(meas["cells"][f"pile_{i}"][1] / exact - 1) for i in range(1, 10)))
+        errs.append(max(abs(meas["cells"][groups.pile(i)][1] / exact - 1) for i in range(1, 10)))
     assert all(a < b for a, b in zip(cells[:-1], cells[1:], strict=True))
     assert all(b <= a * (1 + 1e-12) for a, b in zip(errs[:-1], errs[1:], strict=True))

@@ -8,7 +8,9 @@ import pytest
 
 from pilegroup.model import ScenarioError
 from pilegroup.studies.cli import build_parser, main
-from pilegroup.studies.report import COLUMNS, FIGURES, results_markdown, write_report
+from pilegroup.studies.plots import FIGURES
+from pilegroup.studies.report import results_markdown, write_report
+from pilegroup.studies.tables import COLUMNS
 
 #: Four layers: the soft layers 1-3 of Table 1 and one stiff layer (number, name, top, bottom).
 LAYERS = [(1, "clay", 0.0, 0.4), (2, "mud", 0.4, 19.7), (3, "mucky_clay", 19.7, 32.1),
