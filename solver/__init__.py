@@ -8,7 +8,6 @@ Units kN, m, day; tension positive; ``p`` = excess pore pressure (compression po
 from pilegroup.errors import ConvergenceError, SolverError, SolverInputError, StepFailure
 from pilegroup.solver.exports import (
     Export,
-    SettlementSeries,
     SummaryWriter,
     XDMFSeries,
     run_summary,
@@ -52,7 +51,6 @@ __all__ = [
     "PressureBC",
     "RigidPlate",
     "RunLog",
-    "SettlementSeries",
     "SoilMaterial",
     "SolverError",
     "SolverInputError",

@@ -2,9 +2,8 @@
 
 Protocol (:class:`Export`): built on a problem (set up), ``write(t, stage)`` at each output
 time (stage ends and ``TimeStepping.milestones``; collective), ``close()`` at the end.
-:class:`XDMFSeries` (fields for ParaView), :class:`SettlementSeries` (``settlement.csv``) and
-:class:`SummaryWriter` (a JSON summary rewritten at every output time) live here; the studies
-add their own (pile probes).
+:class:`XDMFSeries` (fields for ParaView) and :class:`SummaryWriter` (a JSON summary rewritten
+at every output time) live here; the studies add their own (settlement, pile probes).
 
 Everything written states its sign convention: stresses and strains are written **tension
 positive** (as used inside the code); the excess pore pressure is compression positive. Units
@@ -19,7 +18,7 @@ scalars are all-reduced over ``mesh.comm`` first.
 from __future__ import annotations
 
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Protocol
 
@@ -30,9 +29,8 @@ from dolfinx import mesh as dmesh
 from mpi4py import MPI
 
 from pilegroup.constitutive.base import mandel_to_tensor
-from pilegroup.fileio import write_json_atomic, write_text_atomic
+from pilegroup.fileio import write_json_atomic
 from pilegroup.geometry import groups
-from pilegroup.solver.probes import SettlementProbe
 from pilegroup.solver.qpstate import QuadratureState
 
 if TYPE_CHECKING:
@@ -240,31 +238,6 @@ def run_summary(problem: BiotProblem, log: RunLog, extra: dict[str, Any] | None 
     }
     out.update(extra or {})
     return out
-
-
-class SettlementSeries:
-    """``settlement.csv``: mean settlement (m, down positive) of facet groups at output times.
-
-    Columns ``t_day,stage,settlement_m``; rewritten atomically by rank 0 at every write.
-    """
-
-    COLUMNS = "t_day,stage,settlement_m"
-
-    def __init__(self, problem: BiotProblem, names: Sequence[str], path: str | Path) -> None:
-        self.probe = SettlementProbe(problem, names)
-        self.path = Path(path)
-        self.comm = problem.comm
-        self.history: list[tuple[float, str, float]] = []
-
-    def write(self, t: float, stage: str) -> None:
-        """Record the settlement at ``t`` and rewrite the file."""
-        self.history.append((t, stage, self.probe()))
-        if self.comm.rank == 0:
-            lines = [self.COLUMNS] + [f"{a:.6g},{b},{c:.9g}" for a, b, c in self.history]
-            write_text_atomic(self.path, "\n".join(lines) + "\n")
-
-    def close(self) -> None:
-        """Nothing stays open."""
 
 
 class SummaryWriter:

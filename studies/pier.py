@@ -34,7 +34,6 @@ from pilegroup.solver import (
     InterfaceCoupling,
     NewtonOptions,
     PressureBC,
-    SettlementSeries,
     SoilMaterial,
     SolverOptions,
     Stage,
@@ -46,7 +45,7 @@ from pilegroup.solver import (
     run_summary,
 )
 from pilegroup.solver.probes import facet_area
-from pilegroup.studies.piles import PileProbe
+from pilegroup.studies.piles import PileProbe, SettlementSeries
 
 log = logging.getLogger(__name__)
 

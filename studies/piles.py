@@ -26,6 +26,7 @@ Every number is all-reduced over the ranks; rank 0 writes.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
@@ -38,7 +39,13 @@ from pilegroup.fileio import write_text_atomic
 from pilegroup.geometry import groups
 from pilegroup.model import Scenario
 from pilegroup.solver import BiotProblem
-from pilegroup.studies.tables import LAYER_COLUMNS, LOAD_COLUMNS, PROFILE_COLUMNS
+from pilegroup.solver.probes import SettlementProbe
+from pilegroup.studies.tables import (
+    LAYER_COLUMNS,
+    LOAD_COLUMNS,
+    PROFILE_COLUMNS,
+    SETTLEMENT_COLUMNS,
+)
 
 
 def _sum(comm: MPI.Comm, a: np.ndarray) -> np.ndarray:
@@ -245,3 +252,26 @@ class PileProbe:
                                  ("interface_layers.csv", LAYER_COLUMNS, self.pile_layer_rows)):
             if rows:
                 write_text_atomic(self.out / name, "\n".join([head, *rows]) + "\n")
+
+
+class SettlementSeries:
+    """``settlement.csv``: mean settlement (m, down positive) of facet groups at output times.
+
+    An export: rank 0 rewrites the file atomically at every :meth:`write`.
+    """
+
+    def __init__(self, problem: BiotProblem, names: Sequence[str], path: Path) -> None:
+        self.probe = SettlementProbe(problem, names)
+        self.path = Path(path)
+        self.comm = problem.comm
+        self.history: list[tuple[float, str, float]] = []
+
+    def write(self, t: float, stage: str) -> None:
+        """Record the settlement at ``t`` and rewrite the file."""
+        self.history.append((t, stage, self.probe()))
+        if self.comm.rank == 0:
+            lines = [SETTLEMENT_COLUMNS] + [f"{a:.6g},{b},{c:.9g}" for a, b, c in self.history]
+            write_text_atomic(self.path, "\n".join(lines) + "\n")
+
+    def close(self) -> None:
+        """Nothing stays open."""
