@@ -17,6 +17,7 @@ import pyvista as pv
 from dolfinx.io import XDMFFile
 from mpi4py import MPI
 
+from pilegroup.fileio import write_text_atomic
 from pilegroup.geometry.convert import build_mesh, ensure_msh, gmsh_session
 from pilegroup.geometry.groups import CAP_TAG, PILE_TAGS, shaft_of
 from pilegroup.geometry.meshdata import MeshData
@@ -147,16 +148,27 @@ def mesh_command(spec: GeometrySpec, h: float | None, out_dir: str | Path, comm:
                  cache_dir: str | Path | None = None, render: bool = True) -> dict[str, Any]:
     """Mesh ``spec`` (with ``h`` in m if given), write XDMF + PNG to ``out_dir``, return a summary.
 
-    Collective over ``comm``. Files: ``mesh.xdmf``/``.h5`` (mesh, ``cell_tags``,
-    ``facet_tags``), ``mesh.tags.json`` (names), ``mesh_summary.json``, ``plan.png``,
-    ``cutaway.png``. The summary holds global cell / vertex counts, the minimum scaled
-    Jacobian, the number of groups and the timings (s).
+    Collective over ``comm``; see :func:`mesh_outputs` for the files and the summary.
     """
     if h is not None:
         spec = spec.with_h(h)
-    out = Path(out_dir)
     t0 = time.perf_counter()
     md = build_mesh(spec, comm, cache_dir=cache_dir)
+    return mesh_outputs(md, spec, out_dir, render, t0)
+
+
+def mesh_outputs(md: MeshData, spec: GeometrySpec, out_dir: str | Path, render: bool = True,
+                 t0: float | None = None) -> dict[str, Any]:
+    """Write the outputs of the built mesh ``md`` of ``spec`` to ``out_dir``; return a summary.
+
+    Collective over ``md.mesh.comm``. Files: ``mesh.xdmf``/``.h5`` (mesh, ``cell_tags``,
+    ``facet_tags``), ``mesh.tags.json`` (names), ``mesh_summary.json``, ``plan.png``,
+    ``cutaway.png``. The summary holds global cell / vertex counts, the minimum scaled
+    Jacobian, the number of groups and the timings (s; ``command_s`` from ``t0``).
+    """
+    comm = md.mesh.comm
+    t0 = time.perf_counter() if t0 is None else t0
+    out = Path(out_dir)
     xdmf = write_xdmf(md, out / "mesh.xdmf")
     info = md.info
     summary: dict[str, Any] = {
@@ -186,7 +198,7 @@ def mesh_command(spec: GeometrySpec, h: float | None, out_dir: str | Path, comm:
             summary["timings_s"]["render_s"] = time.perf_counter() - t1
             summary["files"]["png"] = [str(f) for f in pngs]
         summary["timings_s"]["command_s"] = time.perf_counter() - t0
-        (out / "mesh_summary.json").write_text(json.dumps(summary, indent=1))
+        write_text_atomic(out / "mesh_summary.json", json.dumps(summary, indent=1))
     return comm.bcast(summary, root=0)
 
 
