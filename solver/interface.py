@@ -43,6 +43,7 @@ import ufl
 from dolfinx import fem, la
 from dolfinx import mesh as dmesh
 
+from pilegroup.constitutive.base import ConstitutiveLaw
 from pilegroup.geometry import groups
 from pilegroup.geometry.meshdata import MeshData
 from pilegroup.solver.layout import BodySplit
@@ -111,7 +112,7 @@ class NodalInterface:
     has_matrix = False
 
     def __init__(self, md: MeshData, split: BodySplit, V_struct: fem.FunctionSpace,
-                 V_soil: fem.FunctionSpace, laws: Sequence[Any],
+                 V_soil: fem.FunctionSpace, laws: Sequence[ConstitutiveLaw | None],
                  traction0: Callable[[np.ndarray, int], np.ndarray]) -> None:
         self.split = split
         self.V_struct, self.V_soil = V_struct, V_soil
