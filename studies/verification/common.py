@@ -38,9 +38,8 @@ if TYPE_CHECKING:  # annotations only
     from pilegroup.solver.interface import NodalInterface
 
 __all__ = ["DRAINED", "TENTHS", "ElasticSoil", "allsum", "box_bcs", "eval_points",
-           "load_then_consolidate",
-           "p_along", "shaft_profile_oscillation", "single_pile_mesh", "soil_problem",
-           "structure_problem", "two_blocks", "world"]
+           "load_then_consolidate", "p_along", "shaft_profile_oscillation", "single_pile_mesh",
+           "soil_problem", "structure_problem", "two_blocks", "world"]
 
 #: Every pressure dof fixed to zero (drained analysis).
 DRAINED = (PressureBC(None),)
