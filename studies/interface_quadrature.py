@@ -4,7 +4,7 @@
 (rank 0): for ``shaft-capacity`` with the shaft's normal penalty as used (4e6 kPa/m) and 10x,
 100x stiffer, and for ``tied-limit`` (1e9 kPa/m, x 10, x 100): the case error against its
 reference, Newton iterations, accepted and rejected steps, the roughness of the shaft traction
-profiles (:func:`~pilegroup.studies.verification_interface.shaft_profile_oscillation`: total
+profiles (:func:`~pilegroup.studies.verification.shaft_profile_oscillation`: total
 variation over range, 1 = monotonic) and the wall time. With ``--scenario`` (e.g. the coarsened
 single pile of tests/conftest.py) the scenario is also run to its end with each quadrature and
 its normal penalty factor x 1, 10, 100 (wall time, Newton iterations, rejected steps, head
@@ -14,9 +14,27 @@ settlement, roughness). Results: docs/solver.md.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import sys
+import time
 from collections.abc import Sequence
 from typing import Any
+
+from mpi4py import MPI
+
+from pilegroup.geometry.adapter import geometry_spec
+from pilegroup.geometry.convert import build_mesh
+from pilegroup.model import load_scenario
+from pilegroup.solver.probes import SettlementProbe
+from pilegroup.solver.stepping import run_stages
+from pilegroup.studies.pier import (
+    GEOSTATIC_TOL_M,
+    build_problem,
+    load_facets,
+    solver_stages,
+    time_stepping,
+)
+from pilegroup.studies.verification import shaft_capacity, shaft_profile_oscillation, tied_limit
 
 QUADRATURES = ("nodal", "gauss")
 
@@ -29,8 +47,6 @@ def _row(case: str, q: str, k_normal: float, r: Any, osc: dict, **extra: Any
 
 def case_rows(factors: Sequence[float] = (1.0, 10.0, 100.0)) -> list[dict[str, Any]]:
     """One row per (case, normal penalty factor, quadrature): shaft-capacity and tied-limit."""
-    from pilegroup.studies.verification_interface import shaft_capacity, tied_limit
-
     rows = []
     for f in factors:
         for q in QUADRATURES:
@@ -55,25 +71,6 @@ def scenario_rows(path: str, factors: Sequence[float] = (1.0, 10.0, 100.0)
     ``factors`` multiply the scenario's ``interface.normal_stiffness_factor``. The problem,
     stages and time stepping are those of ``pilegroup run`` (studies/pier.py).
     """
-    import dataclasses
-    import time
-
-    from mpi4py import MPI
-
-    from pilegroup.geometry.adapter import geometry_spec
-    from pilegroup.geometry.convert import build_mesh
-    from pilegroup.model import load_scenario
-    from pilegroup.solver.probes import SettlementProbe
-    from pilegroup.solver.stepping import run_stages
-    from pilegroup.studies.pier import (
-        GEOSTATIC_TOL_M,
-        build_problem,
-        load_facets,
-        solver_stages,
-        time_stepping,
-    )
-    from pilegroup.studies.verification_interface import shaft_profile_oscillation
-
     sc0 = load_scenario(path)
     md = build_mesh(geometry_spec(sc0), MPI.COMM_WORLD)
     rows = []
@@ -99,8 +96,6 @@ def scenario_rows(path: str, factors: Sequence[float] = (1.0, 10.0, 100.0)
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Print the tables (rank 0)."""
-    from mpi4py import MPI
-
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--scenario", action="append", default=[],
                     help="also run this scenario (file or bundled name); repeatable")
@@ -130,6 +125,4 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    import pilegroup  # noqa: F401
-
     sys.exit(main())

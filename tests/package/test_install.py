@@ -1,4 +1,4 @@
-"""Both a normal (wheel) and an editable install import every sub-package (issue 2)."""
+"""Both a normal (wheel) and an editable install import every sub-package."""
 
 import os
 import subprocess
@@ -8,7 +8,8 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
-SUBPACKAGES = ["model", "model.scenarios", "geometry", "constitutive", "solver", "studies"]
+SUBPACKAGES = ["model", "model.scenarios", "geometry", "constitutive", "solver", "studies",
+               "studies.verification"]
 PROBE = (
     "import importlib, sys\n"
     "import pilegroup\n"

@@ -15,6 +15,37 @@ from pilegroup.studies import verification as ver
 ROOT = Path(__file__).resolve().parents[2]
 
 
+def test_cases_are_registered_in_run_order():
+    assert list(ver.CASES) == ["terzaghi", "mandel", "triaxial", "shaft-capacity",
+                               "interface-patch", "tied-limit"]
+
+
+def test_registry_passes_only_accepted_overrides(monkeypatch):
+    from pilegroup.studies.verification import registry
+
+    monkeypatch.setattr(registry, "CASES", {})
+    monkeypatch.setattr(registry, "_OPTIONS", {})
+    calls = []
+
+    @registry.register("plain")
+    def plain(size, **kw):
+        calls.append(("plain", size, kw))
+
+    @registry.register("itf", registry.INTERFACE_OPTIONS)
+    def itf(size, **kw):
+        calls.append(("itf", size, kw))
+
+    registry.run_case("plain", "bench", pair="Q1Q1", preset=None, quadrature="gauss")
+    registry.run_case("itf", "fast", pair=None, preset="direct", quadrature="gauss")
+    assert calls == [("plain", "bench", {"pair": "Q1Q1"}),
+                     ("itf", "fast", {"preset": "direct", "quadrature": "gauss"})]
+    assert registry.case_names() == ["plain", "itf"]
+    with pytest.raises(KeyError, match="nonsense"):
+        registry.case_names(["plain", "nonsense"])
+    with pytest.raises(ValueError, match="twice"):
+        registry.register("plain")(plain)
+
+
 @pytest.mark.parametrize("pair", ["Q2Q1", "Q1Q1"])
 def test_terzaghi(pair):
     r = ver.terzaghi(size="fast", pair=pair)

@@ -24,7 +24,8 @@ from pilegroup.solver import (
     TimeStepping,
     run_stages,
 )
-from pilegroup.studies.verification import _eval_points, terzaghi_degree, terzaghi_series
+from pilegroup.studies.verification import eval_points as _eval_points
+from pilegroup.studies.verification import terzaghi_degree, terzaghi_series
 
 
 @pytest.mark.parametrize("pair", ["Q2Q1", "Q1Q1"])

@@ -1,0 +1,50 @@
+"""Verification cases: the real pipeline against closed-form solutions.
+
+Each case meshes a column, block or single pile, runs a :class:`~pilegroup.solver.BiotProblem`
+through :func:`~pilegroup.solver.run_stages` and returns a :class:`CaseResult` with its error,
+the tolerance and the source of the reference. Modules:
+
+* ``registry``: :class:`CaseResult`, the :func:`register` decorator and :data:`CASES`;
+* ``common``: communicator, point evaluation, box boundary conditions, small meshes and the
+  problem builders the cases share;
+* ``consolidation``: ``terzaghi``, ``mandel`` (with their closed forms; the first-step check);
+* ``soil``: ``triaxial`` (and the strip-footing measurements);
+* ``interface``: ``shaft-capacity``, ``interface-patch``, ``tied-limit``;
+* ``bench``: error against wall time (``pilegroup bench verification``);
+* ``runner``: :func:`run_cases` and :func:`main`
+  (``python -m pilegroup.studies.verification [CASE ...] [--size fast|bench] [--json]``,
+  also under ``mpirun -n 2``; ``pilegroup verify``).
+"""
+
+# The case modules register their cases when imported: this order is the order in which
+# ``pilegroup verify`` runs and lists them.
+# isort: off
+from pilegroup.studies.verification import consolidation, soil, interface  # noqa: F401
+# isort: on
+
+from pilegroup.studies.verification.bench import BENCH_LEVELS, bench_markdown, bench_verification
+from pilegroup.studies.verification.common import eval_points, shaft_profile_oscillation
+from pilegroup.studies.verification.consolidation import (
+    first_step_oscillation,
+    mandel,
+    mandel_centre_pressure,
+    oscillation_measure,
+    terzaghi,
+    terzaghi_degree,
+    terzaghi_series,
+)
+from pilegroup.studies.verification.interface import interface_patch, shaft_capacity, tied_limit
+from pilegroup.studies.verification.registry import CASES, CaseResult, register
+from pilegroup.studies.verification.runner import main, run_cases
+from pilegroup.studies.verification.soil import (
+    footing_undrained_roughness,
+    strip_footing,
+    triaxial,
+)
+
+__all__ = ["BENCH_LEVELS", "CASES", "CaseResult", "bench_markdown", "bench_verification",
+           "eval_points", "first_step_oscillation", "footing_undrained_roughness",
+           "interface_patch", "main", "mandel", "mandel_centre_pressure",
+           "oscillation_measure", "register", "run_cases", "shaft_capacity",
+           "shaft_profile_oscillation", "strip_footing", "terzaghi", "terzaghi_degree",
+           "terzaghi_series", "tied_limit", "triaxial"]
