@@ -30,7 +30,8 @@ from collections.abc import Iterable
 
 CAP = "cap"
 CAP_TAG = 300
-SIDES = ("side_xmin", "side_xmax", "side_ymin", "side_ymax")
+SIDE_XMIN, SIDE_XMAX, SIDE_YMIN, SIDE_YMAX = "side_xmin", "side_xmax", "side_ymin", "side_ymax"
+SIDES = (SIDE_XMIN, SIDE_XMAX, SIDE_YMIN, SIDE_YMAX)
 BOTTOM = "bottom"
 GROUND = "ground_surface"
 CAP_BOTTOM, CAP_TOP, CAP_SIDE = "cap_bottom", "cap_top", "cap_side"

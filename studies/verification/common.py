@@ -19,6 +19,7 @@ from dolfinx import mesh as dmesh
 from mpi4py import MPI
 
 from pilegroup.constitutive.soil import LinearElastic
+from pilegroup.geometry import groups
 from pilegroup.geometry.box import build_box
 from pilegroup.geometry.convert import build_mesh
 from pilegroup.geometry.meshdata import MeshData
@@ -110,9 +111,9 @@ def p_along(problem: BiotProblem, z: np.ndarray, x: float, y: float) -> np.ndarr
 
 def box_bcs(bottom: Sequence[int] = (2,), *extra: DisplacementBC) -> list[DisplacementBC]:
     """Rollers on the four sides of a box, the ``bottom`` components fixed, then ``extra``."""
-    return [DisplacementBC("side_xmin", 0), DisplacementBC("side_xmax", 0),
-            DisplacementBC("side_ymin", 1), DisplacementBC("side_ymax", 1),
-            *(DisplacementBC("bottom", c) for c in bottom), *extra]
+    return [DisplacementBC(groups.SIDE_XMIN, 0), DisplacementBC(groups.SIDE_XMAX, 0),
+            DisplacementBC(groups.SIDE_YMIN, 1), DisplacementBC(groups.SIDE_YMAX, 1),
+            *(DisplacementBC(groups.BOTTOM, c) for c in bottom), *extra]
 
 
 def soil_problem(md: MeshData, soil: SoilMaterial, disc: Discretisation,
@@ -120,7 +121,7 @@ def soil_problem(md: MeshData, soil: SoilMaterial, disc: Discretisation,
                  loads: Sequence[SurfaceLoad] = (), plates: Sequence[RigidPlate] = (),
                  options: SolverOptions | None = None) -> BiotProblem:
     """A weightless problem on a box whose one cell group ``soil_layer_01`` is ``soil``."""
-    return BiotProblem(md, {"soil_layer_01": soil}, disc, displacement_bcs=bcs,
+    return BiotProblem(md, {groups.soil_layer(1): soil}, disc, displacement_bcs=bcs,
                        pressure_bcs=pressure_bcs, loads=loads, plates=plates, options=options,
                        self_weight=False)
 
@@ -149,7 +150,7 @@ def two_blocks(comm: MPI.Comm) -> MeshData:
     """Two unit cubes stacked: ``pile_1`` (z in [0, 1]) on ``soil_layer_01`` (z in [-1, 0]).
 
     Facet groups: ``top`` (z = 1), ``struct_side`` and ``soil_side`` (the vertical faces of each
-    block), ``bottom`` (z = -1) and the interior ``base_1`` (z = 0). One cell per block.
+    block), ``bottom`` (z = -1) and the interior ``base_p1`` (z = 0). One cell per block.
     """
     md0 = build_box(comm, (0.0, 1.0), (0.0, 1.0), np.array([-1.0, 0.0, 1.0]), 1, 1,
                     layer_tops=[0.0])
@@ -158,7 +159,7 @@ def two_blocks(comm: MPI.Comm) -> MeshData:
     fdim = tdim - 1
     msh.topology.create_entities(fdim)
     msh.topology.create_connectivity(fdim, tdim)
-    names = {"top": 1, "struct_side": 2, "soil_side": 3, "bottom": 4, "base_1": 5}
+    names = {"top": 1, "struct_side": 2, "soil_side": 3, groups.BOTTOM: 4, groups.base(1): 5}
     imap = msh.topology.index_map(fdim)
     facets = np.arange(imap.size_local + imap.num_ghosts, dtype=np.int32)
     mid = dmesh.compute_midpoints(msh, fdim, facets)
@@ -167,14 +168,14 @@ def two_blocks(comm: MPI.Comm) -> MeshData:
             | np.isclose(mid[:, 1], 0.0, atol=tol) | np.isclose(mid[:, 1], 1.0, atol=tol))
     vals = np.zeros(facets.size, dtype=np.int32)
     vals[np.isclose(mid[:, 2], 1.0, atol=tol)] = names["top"]
-    vals[np.isclose(mid[:, 2], -1.0, atol=tol)] = names["bottom"]
-    vals[np.isclose(mid[:, 2], 0.0, atol=tol) & ~side] = names["base_1"]
+    vals[np.isclose(mid[:, 2], -1.0, atol=tol)] = names[groups.BOTTOM]
+    vals[np.isclose(mid[:, 2], 0.0, atol=tol) & ~side] = names[groups.base(1)]
     vals[side & (mid[:, 2] > 0)] = names["struct_side"]
     vals[side & (mid[:, 2] < 0)] = names["soil_side"]
     keep = vals > 0
     ft = dmesh.meshtags(msh, fdim, facets[keep], vals[keep])
     # build_box numbers layers from the top: 1 = z > 0 (the structure), 2 = z < 0 (the soil)
-    return MeshData(msh, md0.cell_tags, ft, {"pile_1": 1, "soil_layer_01": 2}, names,
+    return MeshData(msh, md0.cell_tags, ft, {groups.pile(1): 1, groups.soil_layer(1): 2}, names,
                     {"builder": "verification.common.two_blocks"})
 
 

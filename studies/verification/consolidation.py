@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 from mpi4py import MPI
 
+from pilegroup.geometry import groups
 from pilegroup.geometry.box import build_box, graded_levels
 from pilegroup.geometry.meshdata import MeshData
 from pilegroup.solver import (
@@ -148,8 +149,8 @@ class TerzaghiColumn:
                 options: SolverOptions | None = None) -> BiotProblem:
         """The column's problem on the box mesh ``md``."""
         return soil_problem(md, self.soil.material(), disc, box_bcs(),
-                            pressure_bcs=[PressureBC("ground_surface")],
-                            loads=[SurfaceLoad("ground_surface", self.q)], options=options)
+                            pressure_bcs=[PressureBC(groups.GROUND)],
+                            loads=[SurfaceLoad(groups.GROUND, self.q)], options=options)
 
 
 def _terzaghi_record(col: TerzaghiColumn, times: list[float], rows: list[dict[str, float]],
@@ -259,10 +260,10 @@ class MandelSlab:
         """
         return soil_problem(
             md, self.soil.material(), disc,
-            [DisplacementBC("side_xmin", 0), DisplacementBC("bottom", 2),
-             DisplacementBC("side_ymin", 1), DisplacementBC("side_ymax", 1)],
-            pressure_bcs=[PressureBC("side_xmax")],
-            plates=[RigidPlate("ground_surface", 2, -self.F * self.thick)], options=options)
+            [DisplacementBC(groups.SIDE_XMIN, 0), DisplacementBC(groups.BOTTOM, 2),
+             DisplacementBC(groups.SIDE_YMIN, 1), DisplacementBC(groups.SIDE_YMAX, 1)],
+            pressure_bcs=[PressureBC(groups.SIDE_XMAX)],
+            plates=[RigidPlate(groups.GROUND, 2, -self.F * self.thick)], options=options)
 
 
 def _mandel_record(slab: MandelSlab, times: list[float], rows: list[dict[str, float]],

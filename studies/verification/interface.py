@@ -26,6 +26,7 @@ from mpi4py import MPI
 
 from pilegroup.constitutive.interface import PileSoilInterface, dp_outer_cone
 from pilegroup.constitutive.soil import LinearElastic
+from pilegroup.geometry import groups
 from pilegroup.geometry.meshdata import MeshData
 from pilegroup.solver import (
     GAMMA_W,
@@ -107,7 +108,7 @@ class _ShaftRecorder:
         self.capacity0 = 0.0
 
     def __call__(self, p: BiotProblem, t: float, stage: str) -> None:
-        R = p.reaction("head_p1", 2)
+        R = p.reaction(groups.head(1), 2)
         if stage == "geostatic":
             self.R0 = R
             self.capacity0 = self.test.capacity(p.interface, self.comm)
@@ -193,9 +194,9 @@ def shaft_capacity(size: str = "fast", pair: str = "Q1Q1", preset: str = "direct
     base = PileSoilInterface(K=1.0e3, n=0.0, R_f=0.0, c=test.c, phi_deg=test.phi, eta=1.0,
                              k_normal=1.0, delta_deg=30.0, viscous=False)
     pb = structure_problem(
-        md, {"soil_layer_01": soil, "pile_1": ElasticSolid(3.0e7, 0.2)}, pair, preset,
+        md, {groups.soil_layer(1): soil, groups.pile(1): ElasticSolid(3.0e7, 0.2)}, pair, preset,
         f"shaftcap_{pair}_", InterfaceCoupling((shaft, base), quadrature=quadrature),
-        box_bcs((0, 1, 2), DisplacementBC("head_p1", 2, -test.push)))
+        box_bcs((0, 1, 2), DisplacementBC(groups.head(1), 2, -test.push)))
     rec = _ShaftRecorder(test, comm)
     ts = TimeStepping(dt0=0.05, dt_max=0.05, dt_min=1e-4, milestones=TENTHS)
     log = run_stages(pb, [Stage("geostatic", "geostatic"), Stage("push", "load", 1.0, 1.0)], ts,
@@ -229,11 +230,12 @@ def _patch_problem(md: MeshData, law: PileSoilInterface, preset: str, quadrature
     Soil block fixed; structure closed by ``GAP`` and slid by ``SLIP2`` along y (ramped), its
     top a rigid plate in x carrying ``TAU1`` over the 1 m^2 interface.
     """
-    bcs = [DisplacementBC(f, cpt) for f in ("bottom", "soil_side") for cpt in range(3)]
+    bcs = [DisplacementBC(f, cpt) for f in (groups.BOTTOM, "soil_side") for cpt in range(3)]
     bcs += [DisplacementBC(f, 2, -GAP, ramp=False) for f in ("top", "struct_side")]
     bcs += [DisplacementBC(f, 1, SLIP2) for f in ("top", "struct_side")]
     return structure_problem(
-        md, {"soil_layer_01": ElasticSoil().material(), "pile_1": ElasticSolid(1.0e6, 0.2)},
+        md, {groups.soil_layer(1): ElasticSoil().material(),
+             groups.pile(1): ElasticSolid(1.0e6, 0.2)},
         "Q1Q1", preset, "patch_", InterfaceCoupling((None, law), quadrature=quadrature), bcs,
         plates=[RigidPlate("top", 0, -TAU1 * 1.0)], self_weight=False)
 
@@ -340,7 +342,7 @@ def interface_patch(size: str = "fast", pair: str = "Q1Q1", preset: str = "direc
     soil node and every non-interface structure node lies on a constrained face, which makes the
     discrete solution exactly homogeneous); the upper block is the structure (``pile_1``,
     E = 1 GPa), the lower the soil (drained, all pressure dofs fixed), joined on the interior
-    facet group ``base_1`` (local frame n = -z, t1 = x, t2 = y; 1 m^2). The soil block is fixed
+    facet group ``base_p1`` (local frame n = -z, t1 = x, t2 = y; 1 m^2). The soil block is fixed
     on all its faces. The structure: z prescribed on all its faces (closure g = 1 mm from the
     first step), y prescribed (transverse slip ramped to 10 mm over day 0–1, then held), x of
     the top face a rigid plate under force control: the shear force is ramped to 32 kN over day
@@ -368,7 +370,7 @@ def interface_patch(size: str = "fast", pair: str = "Q1Q1", preset: str = "direc
                             k_normal=1.0e5, delta_deg=20.0, viscous=True, integrator="implicit",
                             variant="default")
     pb = _patch_problem(md, law, preset, quadrature)
-    rec = _PatchRecorder(pb.interface, facet_area(md, ["base_1"], interior=True), comm)
+    rec = _PatchRecorder(pb.interface, facet_area(md, [groups.base(1)], interior=True), comm)
     ts = TimeStepping(dt0=0.05, dt_max=0.5, dt_min=1e-5, grow=1.5,
                       milestones=(0.25, 0.5, 0.75, 2.0, 3.0, 4.0))
     log = run_stages(pb, [Stage("shear", "load", 1.0, 1.0),
@@ -405,8 +407,8 @@ def _tied_run(md: MeshData, mats: dict[str, SoilMaterial | ElasticSolid],
               q: float, comm: MPI.Comm) -> dict[str, Any]:
     """Geostatic stage, then ``q`` (kPa) on the pile head in one step; the head settlement."""
     pb = structure_problem(md, mats, pair, preset, prefix, coupling, box_bcs((0, 1, 2)),
-                           loads=[SurfaceLoad("head_p1", q)])
-    probe = SettlementProbe(pb, ["head_p1"])
+                           loads=[SurfaceLoad(groups.head(1), q)])
+    probe = SettlementProbe(pb, [groups.head(1)])
     log = run_stages(pb, [Stage("geostatic", "geostatic"), Stage("load", "load", 0.0, 1.0)],
                      TimeStepping(), geostatic_tol=1e-4)
     det, det_z = _detached_points(pb.interface, comm) if pb.interface is not None else (0, [])
@@ -442,12 +444,13 @@ def tied_limit(size: str = "fast", pair: str = "Q1Q1", preset: str = "direct",
     t0 = time.perf_counter()
     L, Q = 4.0, 300.0
     md = single_pile_mesh(comm, (("upper", 2.0), ("lower", None)), L, size)
-    mats = {"soil_layer_01": SoilMaterial(LinearElastic(5.0e3, 0.3), 1e-3, 0.5, 17.0, K0=0.7),
-            "soil_layer_02": SoilMaterial(LinearElastic(2.0e4, 0.3), 1e-3, 0.4, 19.0, K0=0.6),
-            "pile_1": ElasticSolid(3.0e7, 0.2)}
+    mats = {
+        groups.soil_layer(1): SoilMaterial(LinearElastic(5.0e3, 0.3), 1e-3, 0.5, 17.0, K0=0.7),
+        groups.soil_layer(2): SoilMaterial(LinearElastic(2.0e4, 0.3), 1e-3, 0.4, 19.0, K0=0.6),
+        groups.pile(1): ElasticSolid(3.0e7, 0.2)}
     stiff = PileSoilInterface(K=1.0e8, n=0.0, R_f=0.0, c=0.0, phi_deg=20.0, eta=1.0,
                               k_normal=1.0e9 * k_normal_factor, delta_deg=30.0, viscous=False)
-    q = Q / facet_area(md, ["head_p1"])
+    q = Q / facet_area(md, [groups.head(1)])
     out = {mode: _tied_run(md, mats, coupling, f"tied_{mode}_{pair}_", pair, preset, q, comm)
            for mode, coupling in (("tied", None), ("interface", InterfaceCoupling(
                (stiff,) * 4, quadrature=quadrature)))}

@@ -17,6 +17,7 @@ from dolfinx import mesh as dmesh
 from mpi4py import MPI
 
 from pilegroup.constitutive.soil import DruckerPrager, MohrCoulomb
+from pilegroup.geometry import groups
 from pilegroup.geometry.box import build_box
 from pilegroup.geometry.meshdata import MeshData
 from pilegroup.solver import (
@@ -55,13 +56,14 @@ def _triaxial_problem(comm: MPI.Comm, n: int, pair: str, preset: str, xi: float,
     md = build_box(comm, (0.0, 1.0), (0.0, 1.0), np.linspace(0.0, 1.0, n + 1), n, n)
     pb = soil_problem(
         md, SoilMaterial(soil, k_m_per_day=1e-3, porosity=0.4), Discretisation(pair=pair),
-        [DisplacementBC("side_xmin", 0), DisplacementBC("side_ymin", 1),
-         DisplacementBC("bottom", 2), DisplacementBC("ground_surface", 2, value=-0.02)],
+        [DisplacementBC(groups.SIDE_XMIN, 0), DisplacementBC(groups.SIDE_YMIN, 1),
+         DisplacementBC(groups.BOTTOM, 2), DisplacementBC(groups.GROUND, 2, value=-0.02)],
         pressure_bcs=DRAINED,
-        loads=[SurfaceLoad("side_xmax", sc, ramp=False),
-               SurfaceLoad("side_ymax", sc * (1 + xi), ramp=False)],
+        loads=[SurfaceLoad(groups.SIDE_XMAX, sc, ramp=False),
+               SurfaceLoad(groups.SIDE_YMAX, sc * (1 + xi), ramp=False)],
         options=SolverOptions(preset=preset, prefix=f"triax_{pair}_"))
-    pb.set_initial_stress({"soil_layer_01": np.array([-sc, -sc * (1 + xi), -sc, 0.0, 0.0, 0.0])})
+    stress0 = np.array([-sc, -sc * (1 + xi), -sc, 0.0, 0.0, 0.0])
+    pb.set_initial_stress({groups.soil_layer(1): stress0})
     return pb
 
 
@@ -106,7 +108,7 @@ def triaxial(size: str = "fast", pair: str = "Q2Q1", n: int | None = None,
 
     def record(p: BiotProblem, t: float, stage: str) -> None:
         hist.append({"t": t, "axial_strain": 0.02 * t, "reaction_kN": p.reaction(
-            "ground_surface", 2)})
+            groups.GROUND, 2)})
 
     ts = TimeStepping(dt0=0.05, dt_min=1e-6, dt_max=0.1, grow=1.5, milestones=TENTHS)
     log = run_stages(pb, [Stage("shear", "load", 1.0, 1.0)], ts, on_milestone=record)
