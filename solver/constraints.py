@@ -127,6 +127,14 @@ class RigidPlateControl:
         self.value = value
         self.U.value = value
 
+    def commit(self) -> None:
+        """Adopt the current plate position."""
+        self.committed = self.value
+
+    def rollback(self) -> None:
+        """Return to the committed plate position."""
+        self.set(self.committed)
+
     def gap(self, problem: BiotProblem, load_factor: float) -> float:
         """Plate resultant minus its target force (kN) at the current state."""
         return problem.block_resultant(self.owned, self.body) - self.target(load_factor)

@@ -298,6 +298,16 @@ class BlockLayout:
         return fem.locate_dofs_topological(self.Q, 0, sv)
 
     # ------------------------------------------------------------------ vectors
+    def commit_fields(self) -> None:
+        """Current fields become the committed ones (``u_n``, ``p_n``)."""
+        for f, fn in zip(self.fields, self.fields_n, strict=True):
+            fn.x.array[:] = f.x.array
+
+    def restore_fields(self) -> None:
+        """Current fields return to the committed ones."""
+        for f, fn in zip(self.fields, self.fields_n, strict=True):
+            f.x.array[:] = fn.x.array
+
     def fields_to_x(self, x: PETSc.Vec) -> None:
         """Copy the current fields into the block vector ``x``."""
         fpetsc.assign(self.fields, x)

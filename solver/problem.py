@@ -388,28 +388,23 @@ class BiotProblem:
         return its
 
     # ------------------------------------------------------------------ state management
-    def _stateful(self) -> list[QuadratureState | NodalInterface]:
-        """Everything with a committed and a trial state."""
-        out: list[QuadratureState | NodalInterface] = [b.qp for b in self.bodies]
-        return out + ([self.interface] if self.interface is not None else [])
+    def _stateful(self) -> list[QuadratureState | NodalInterface | RigidPlateControl]:
+        """Everything with a committed and a trial state besides the fields."""
+        out: list[QuadratureState | NodalInterface | RigidPlateControl] = [
+            b.qp for b in self.bodies]
+        return out + [x for x in (self.interface, self.plate) if x is not None]
 
     def commit(self) -> None:
         """Adopt the converged step: state committed, ``u_n, p_n`` updated."""
         for st in self._stateful():
             st.commit()
-        for f, fn in zip(self.layout.fields, self.layout.fields_n, strict=True):
-            fn.x.array[:] = f.x.array
-        if self.plate is not None:
-            self.plate.committed = self.plate.value
+        self.layout.commit_fields()
 
     def rollback(self) -> None:
         """Return to the last committed step (fields, plate and quadrature state)."""
         for st in self._stateful():
             st.rollback()
-        for fn, f in zip(self.layout.fields_n, self.layout.fields, strict=True):
-            f.x.array[:] = fn.x.array
-        if self.plate is not None:
-            self.plate.set(self.plate.committed)
+        self.layout.restore_fields()
 
     def reset_displacements(self) -> None:
         """Set u (current and committed) to zero, keeping the stress state (after geostatic)."""
