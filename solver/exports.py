@@ -17,6 +17,7 @@ scalars are all-reduced over ``mesh.comm`` first.
 
 from __future__ import annotations
 
+import resource
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -196,6 +197,11 @@ def _vertex_to_dof_sub(fmesh: dmesh.Mesh) -> np.ndarray:
     return _vertex_to_dof(fem.functionspace(fmesh, ("Lagrange", 1)))
 
 
+def peak_rss_mb() -> float:
+    """Peak resident memory of this process so far, MB (``getrusage``; Linux reports KiB)."""
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+
+
 def write_summary(path: str | Path, data: dict[str, Any], comm: MPI.Comm) -> None:
     """Write ``data`` as JSON on rank 0 (atomic rename); every rank returns after it."""
     if comm.rank == 0:
@@ -217,7 +223,9 @@ def run_summary(problem: BiotProblem, log: RunLog, extra: dict[str, Any] | None 
         "ranks": comm.size,
         "dofs": problem.num_dofs,
         "pair": problem.disc.pair,
-        "linear_solver": problem.options.preset,
+        "linear_solver": problem.linear_solver.preset,
+        "linear_solver_fallbacks": problem.linear_solver.fallbacks,
+        "peak_rss_mb_per_rank": comm.allgather(peak_rss_mb()),
         "steps": len(log.steps),
         "rejected_steps": log.rejected,
         "newton_iterations": log.newton_total,

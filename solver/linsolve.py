@@ -21,7 +21,8 @@ a negative reason raises :class:`ConvergenceError`.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+import logging
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -29,6 +30,8 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from pilegroup.errors import ConvergenceError, SolverInputError
+
+log = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True)
@@ -42,6 +45,8 @@ class Preset:
         fixed_stress: the preset needs the fixed-stress preconditioning matrix.
         reuse_factor_its: > 0: keep the factorisation across Newton iterations and steps as
             GMRES's preconditioner; refactor after a solve needing more iterations than this.
+        fallback: the preset that takes over (with one warning line) when a solve with this
+            one fails; ``None``: the failure is the step's.
     """
 
     name: str
@@ -49,6 +54,7 @@ class Preset:
     fieldsplit: bool = False
     fixed_stress: bool = False
     reuse_factor_its: int = 0
+    fallback: str | None = None
 
 
 PRESETS: dict[str, Preset] = {
@@ -100,6 +106,7 @@ PRESETS: dict[str, Preset] = {
         },
         fieldsplit=True,
         fixed_stress=True,
+        fallback="direct_reuse",
     ),
 }
 
@@ -173,34 +180,89 @@ def check_reason(ksp: PETSc.KSP, what: str = "linear solve") -> int:
 
 
 class LinearSolver:
-    """The problem's KSP; with a reuse preset, one LU factorisation serves many solves.
+    """The problem's KSP from a preset, with factorisation reuse and a fallback preset.
 
     Presets with ``reuse_factor_its`` keep the last LU factorisation as the preconditioner of
     GMRES across Newton iterations and steps (the matrix itself is always the current Jacobian,
     so Newton stays exact); a solve that needs more than ``reuse_factor_its`` iterations, or
     fails, triggers a new factorisation (and a re-solve when it failed). A factorisation made
     under another set of constraints (undrained steps release the drainage conditions) is not
-    tried at all: it is refactored at once.
+    tried at all: it is refactored at once. A preset with a ``fallback`` that fails is replaced
+    by the fallback for the rest of the run (one warning line; :attr:`fallbacks` records it).
+
+    Args:
+        comm: communicator of the problem.
+        A: the system matrix (its values change, the object stays).
+        prefix: options prefix of the problem.
+        preset: preset name; overrides: extra options of that preset.
+        fieldsplit_data: ``() -> (is_u, is_p, near_nullspace)`` for fieldsplit presets.
     """
 
-    def __init__(self, ksp: PETSc.KSP, preset: str) -> None:
-        self.ksp = ksp
-        self.limit = get_preset(preset).reuse_factor_its
+    def __init__(self, comm: MPI.Comm, A: PETSc.Mat, prefix: str, preset: str,
+                 overrides: Mapping[str, Any] | None,
+                 fieldsplit_data: Callable[[], tuple[PETSc.IS, PETSc.IS, PETSc.NullSpace]]
+                 ) -> None:
+        self.comm, self.prefix, self.A = comm, prefix, A
+        self.P: PETSc.Mat | None = None
+        self._fieldsplit_data = fieldsplit_data
         self.refactorisations = 0  # LU factorisations with a reuse preset
+        self.fallbacks: list[str] = []
+        self.ksp: PETSc.KSP | None = None
+        self._use(preset, overrides)
+
+    def _use(self, preset: str, overrides: Mapping[str, Any] | None) -> None:
+        """Build the KSP of ``preset`` (the previous preset's options are removed)."""
+        spec = get_preset(preset)
+        if self.ksp is not None:
+            db = PETSc.Options()
+            for k in merged_options(self.preset, self._overrides):
+                db.delValue(f"{self.prefix}{k}")
+            self.ksp.destroy()
+        is_u = is_p = nns = None
+        if spec.fieldsplit:
+            is_u, is_p, nns = self._fieldsplit_data()
+        self.preset, self._overrides, self.spec = preset, overrides, spec
+        self.ksp = create_ksp(self.comm, self.A, self._preconditioning(), self.prefix, preset,
+                              overrides, is_u, is_p, nns)
         self._reusing = False
         self._factor_undrained: bool | None = None  # constraints of the kept factorisation
 
+    def _preconditioning(self) -> PETSc.Mat | None:
+        return self.P if self.spec.fixed_stress else None
+
+    @property
+    def uses_preconditioning_matrix(self) -> bool:
+        """Whether the preset preconditions with the fixed-stress matrix ``P``."""
+        return self.spec.fixed_stress
+
     def set_operators(self, A: PETSc.Mat, P: PETSc.Mat | None) -> None:
-        """Use ``A`` (and ``P`` to precondition, else ``A``)."""
-        self.ksp.setOperators(A, P if P is not None else A)
+        """Use ``A`` (and ``P`` to precondition when the preset asks for it)."""
+        self.A, self.P = A, P
+        pre = self._preconditioning()
+        self.ksp.setOperators(A, pre if pre is not None else A)
 
     def _set_reuse(self, reuse: bool) -> None:
         self.ksp.getPC().setReusePreconditioner(reuse)
         self._reusing = reuse
 
     def solve(self, rhs: PETSc.Vec, sol: PETSc.Vec, undrained: bool) -> int:
-        """Solve ``A sol = rhs``; returns the Krylov iterations (raises when diverged)."""
-        limit = self.limit
+        """Solve ``A sol = rhs``; returns the Krylov iterations (raises when it fails)."""
+        try:
+            return self._solve(rhs, sol, undrained)
+        except ConvergenceError as exc:
+            fallback = self.spec.fallback
+            if fallback is None:
+                raise
+            note = f"linear solver preset {self.preset!r} failed ({exc}); continuing with " \
+                f"{fallback!r}"
+            self.fallbacks.append(note)
+            if self.comm.rank == 0:
+                log.warning(note)
+            self._use(fallback, None)
+            return self.solve(rhs, sol, undrained)
+
+    def _solve(self, rhs: PETSc.Vec, sol: PETSc.Vec, undrained: bool) -> int:
+        limit = self.spec.reuse_factor_its
         if limit and self._reusing and self._factor_undrained != undrained:
             self._set_reuse(False)
         self.ksp.solve(rhs, sol)

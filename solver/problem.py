@@ -20,6 +20,7 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 from dolfinx import fem, la
+from dolfinx import mesh as dmesh
 from dolfinx.cpp.la.petsc import create_index_sets
 from dolfinx.fem import petsc as fpetsc
 from mpi4py import MPI
@@ -45,7 +46,7 @@ from pilegroup.solver.inputs import (
 from pilegroup.solver.interface import NodalInterface
 from pilegroup.solver.interface_gauss import GaussInterface
 from pilegroup.solver.layout import BlockLayout, Body
-from pilegroup.solver.linsolve import LinearSolver, create_ksp, get_preset
+from pilegroup.solver.linsolve import LinearSolver, get_preset
 from pilegroup.solver.newton import NewtonSolver, StepInfo
 from pilegroup.solver.qpstate import QuadratureState
 
@@ -151,14 +152,10 @@ class BiotProblem:
         self._Mbeta = fpetsc.create_matrix(self._P_forms) if self._P_forms is not None else None
         self.spaces = fem.extract_function_spaces(self.F_forms)
         self.b, self.x, self.dx, self.tmp = (fpetsc.create_vector(self.spaces) for _ in range(4))
-        is_u = is_p = nns = None
         opts = self.options
-        if get_preset(opts.preset).fieldsplit:
-            is_u, is_p = self.layout.index_sets(self.A)
-            nns = self.layout.rigid_body_modes()
-        ksp = create_ksp(self.comm, self.A, self.P, opts.prefix, opts.preset, opts.overrides,
-                         is_u, is_p, nns)
-        self.linear_solver = LinearSolver(ksp, opts.preset)
+        self.linear_solver = LinearSolver(
+            self.comm, self.A, opts.prefix, opts.preset, opts.overrides,
+            lambda: (*self.layout.index_sets(self.A), self.layout.rigid_body_modes()))
         self._matrix_key: float | None = None  # dt of the assembled matrix (linear reuse)
         self._itf_is: list[PETSc.IS] | None = None  # index sets for the interface's matrix
 
@@ -196,7 +193,7 @@ class BiotProblem:
         return self.layout.Q
 
     @property
-    def p_mesh(self) -> object:
+    def p_mesh(self) -> dmesh.Mesh:
         """The mesh of the pressure (the soil sub-mesh when there are solids)."""
         return self.layout.p_mesh
 
@@ -344,7 +341,7 @@ class BiotProblem:
         self.A.assemble()
         if self.interface is not None and self.interface.has_matrix:
             self._add_interface_matrix(bcs)
-        if self._Mbeta is not None:
+        if self._Mbeta is not None and self.linear_solver.uses_preconditioning_matrix:
             self._assemble_fixed_stress(bcs)
         self.linear_solver.set_operators(self.A, self.P)
         self._matrix_key = key
