@@ -7,9 +7,12 @@ rejected with the dotted key path (``layers[3].E_MPa``); range rules live in the
 
 from __future__ import annotations
 
+import copy
 import dataclasses
+import re
 import tomllib
 import types
+from collections.abc import Mapping
 from importlib import resources
 from pathlib import Path
 from typing import Any, Literal, Union, get_args, get_origin, get_type_hints
@@ -19,6 +22,7 @@ from pilegroup.model.scenario import Scenario
 
 #: Scenarios shipped with the package (``pilegroup scenario show NAME``).
 BUNDLED = ("pier667", "single_pile")
+_INDEXED = re.compile(r"([A-Za-z_][A-Za-z0-9_]*)\[(\d+)\]")
 
 
 def _type_name(tp: Any) -> str:
@@ -149,8 +153,57 @@ def scenario_from_dict(data: dict[str, Any]) -> Scenario:
     return build_dataclass(Scenario, data)
 
 
-def load_scenario(source: str | Path) -> Scenario:
-    """Load a scenario from a TOML file path, or a bundled scenario by name (e.g. ``pier667``)."""
+def apply_overrides(data: dict[str, Any], overrides: Mapping[str, Any]) -> dict[str, Any]:
+    """A copy of the TOML document ``data`` with dotted keys set (``numerics.mesh.size_m``).
+
+    A path component may index a list (``layers[2].E_MPa``); missing tables are created, so an
+    unknown key is reported by :func:`scenario_from_dict` with its dotted path.
+    """
+    out = copy.deepcopy(data)
+    for key, value in overrides.items():
+        node: Any = out
+        parts = key.split(".")
+        for depth, part in enumerate(parts):
+            m = _INDEXED.fullmatch(part)
+            name, index = (m.group(1), int(m.group(2))) if m else (part, None)
+            if not name or not isinstance(node, dict):
+                raise ScenarioError(key, value, "is not a dotted key path of the scenario")
+            last = depth == len(parts) - 1
+            if index is None:
+                if last:
+                    node[name] = value
+                else:
+                    node = node.setdefault(name, {})
+                continue
+            seq = node.get(name)
+            if not isinstance(seq, list) or not 0 <= index < len(seq):
+                n = len(seq) if isinstance(seq, list) else 0
+                raise ScenarioError(key, value, f"{name} has {n} entries; index {index} is "
+                                    "out of range")
+            if last:
+                seq[index] = value
+            else:
+                node = seq[index]
+    return out
+
+
+def parse_override(text: str) -> tuple[str, Any]:
+    """``"key=value"`` (value in TOML syntax, else taken as a string) -> ``(key, value)``."""
+    key, sep, raw = text.partition("=")
+    if not sep or not key.strip():
+        raise ScenarioError("--set", text, "must be KEY=VALUE, e.g. numerics.mesh.size_m=0.6")
+    try:
+        value = tomllib.loads(f"v = {raw.strip()}")["v"]
+    except tomllib.TOMLDecodeError:
+        value = raw.strip()
+    return key.strip(), value
+
+
+def load_scenario(source: str | Path, overrides: Mapping[str, Any] | None = None) -> Scenario:
+    """Load a scenario from a TOML file path, or a bundled scenario by name (e.g. ``pier667``).
+
+    ``overrides``: dotted keys set before validation (:func:`apply_overrides`).
+    """
     path = Path(source)
     if not path.suffix and str(source) in BUNDLED:
         text = bundled_text(str(source))
@@ -166,7 +219,7 @@ def load_scenario(source: str | Path) -> Scenario:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise ScenarioError("file", where, f"is not valid TOML: {exc}") from None
-    return scenario_from_dict(data)
+    return scenario_from_dict(apply_overrides(data, overrides or {}))
 
 
 def bundled_text(name: str) -> str:
@@ -178,4 +231,5 @@ def bundled_text(name: str) -> str:
         encoding="utf-8")
 
 
-__all__ = ["BUNDLED", "build_dataclass", "bundled_text", "load_scenario", "scenario_from_dict"]
+__all__ = ["BUNDLED", "apply_overrides", "build_dataclass", "bundled_text", "load_scenario",
+           "parse_override", "scenario_from_dict"]

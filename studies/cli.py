@@ -16,12 +16,20 @@ from pathlib import Path
 
 from pilegroup.fileio import write_text_atomic
 from pilegroup.model import BUNDLED, PilegroupError, ScenarioError, bundled_text, load_scenario
+from pilegroup.model.loader import parse_override
 
 log = logging.getLogger("pilegroup")
 
 EXIT_INPUT = 2
 EXIT_FAILED = 1
 SCENARIO_HELP = "scenario TOML file or bundled name, e.g. pier667"
+SET_HELP = ("set a scenario key before validation (dotted path, TOML value), e.g. "
+            "--set numerics.mesh.size_m=0.6 --set layers[0].E_MPa=3; repeatable")
+
+
+def _overrides(args: argparse.Namespace) -> dict[str, object]:
+    """The ``--set`` overrides of a command (later ones win)."""
+    return dict(parse_override(t) for t in (getattr(args, "set", None) or []))
 
 #: Descriptions of the sub-commands (``pilegroup COMMAND --help``).
 DESCRIPTIONS = {
@@ -98,7 +106,7 @@ def _scenario_arguments(p: argparse.ArgumentParser) -> None:
 def _cmd_run(args: argparse.Namespace) -> int:
     from pilegroup.studies.run import run_scenario
 
-    sc = load_scenario(args.scenario)
+    sc = load_scenario(args.scenario, _overrides(args))
     out = Path(args.out) if args.out else Path("out") / sc.name
     summary = run_scenario(sc, out, mesh_size=args.mesh_size, stop_after=args.stop_after)
     if _world_rank() == 0:
@@ -111,6 +119,7 @@ def _run_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--out", help="output folder (default: out/<scenario name>)")
     p.add_argument("--mesh-size", type=float, default=None, metavar="H",
                    help="element size at the pile surfaces in m (overrides numerics.mesh.size_m)")
+    p.add_argument("--set", action="append", metavar="KEY=VALUE", help=SET_HELP)
     p.add_argument("--stop-after", choices=["mesh", "solve"], default="solve",
                    help="mesh: validate and mesh only (writes scenario.json, mesh/ and "
                    "summary.json); solve (default): run every stage")
@@ -123,7 +132,7 @@ def _cmd_mesh(args: argparse.Namespace) -> int:
     from pilegroup.geometry.adapter import geometry_spec
     from pilegroup.geometry.output import format_summary, mesh_command
 
-    sc = load_scenario(args.scenario)
+    sc = load_scenario(args.scenario, _overrides(args))
     out = Path(args.out) if args.out else Path("out") / sc.name / "mesh"
     summary = mesh_command(geometry_spec(sc, args.mesh_size), None, out, MPI.COMM_WORLD,
                            cache_dir=False if args.no_cache else None, render=not args.no_png)
@@ -137,6 +146,7 @@ def _mesh_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--mesh-size", type=float, default=None, metavar="H",
                    help="element size at the pile surfaces in m (paper: 1.0/0.8/0.6/0.3/0.1)")
     p.add_argument("--out", help="output folder (default: out/<scenario>/mesh)")
+    p.add_argument("--set", action="append", metavar="KEY=VALUE", help=SET_HELP)
     p.add_argument("--no-cache", action="store_true", help="re-mesh even if cached")
     p.add_argument("--no-png", action="store_true", help="skip the PNG renders")
     p.set_defaults(func=_cmd_mesh)
