@@ -205,7 +205,8 @@ class LinearSolver:
         self.comm, self.prefix, self.A = comm, prefix, A
         self.P: PETSc.Mat | None = None
         self._fieldsplit_data = fieldsplit_data
-        self.refactorisations = 0  # LU factorisations with a reuse preset
+        self.refactorisations = 0  # LU factorisations (direct presets)
+        self._new_matrix = True
         self.fallbacks: list[str] = []
         self.ksp: PETSc.KSP | None = None
         self._use(preset, overrides)
@@ -238,6 +239,7 @@ class LinearSolver:
     def set_operators(self, A: PETSc.Mat, P: PETSc.Mat | None) -> None:
         """Use ``A`` (and ``P`` to precondition when the preset asks for it)."""
         self.A, self.P = A, P
+        self._new_matrix = True
         pre = self._preconditioning()
         self.ksp.setOperators(A, pre if pre is not None else A)
 
@@ -270,6 +272,9 @@ class LinearSolver:
             self._set_reuse(False)  # stale factorisation: refactor and solve again
             self.ksp.solve(rhs, sol)
         its = check_reason(self.ksp, "Newton correction")
+        if not limit and self._new_matrix and self.spec.options.get("pc_type") == "lu":
+            self.refactorisations += 1  # preonly LU factors every new matrix once
+        self._new_matrix = False
         if limit:
             if not self._reusing:
                 self.refactorisations += 1

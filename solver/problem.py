@@ -219,7 +219,7 @@ class BiotProblem:
 
     @property
     def refactorisations(self) -> int:
-        """LU factorisations made by a factorisation-reuse preset."""
+        """LU factorisations of the run (direct presets; 0 for iterative ones)."""
         return self.linear_solver.refactorisations
 
     def max_displacement(self) -> float:

@@ -49,7 +49,8 @@ DESCRIPTIONS = {
                "mpirun -n 2."),
     "bench": ("constitutive: law updates per second; meshing: cells, quality and time for the "
               "paper's five mesh sizes; verification: run time against error for Terzaghi and "
-              "Mandel (table, JSON and PNG)."),
+              "Mandel (table, JSON and PNG); pier: the whole job per mesh size and symmetry "
+              "(unknowns, Newton and Krylov counts, factorisations, wall, peak memory)."),
     "report": ("Read the CSV and JSON files of a finished or interrupted run (settlement.csv, "
                "pile_profiles.csv, layer_history.csv, pile_loads.csv, summary.json), write PNG "
                "figures to OUT_DIR/plots (figures whose file is missing are skipped) and, with "
@@ -187,6 +188,12 @@ def _cmd_bench(args: argparse.Namespace) -> int:
         from pilegroup.geometry.bench import main as bench_main
 
         return bench_main([str(h) for h in args.sizes] if args.sizes else [])
+    if args.what == "pier":
+        from pilegroup.studies.bench_pier import bench_pier
+
+        rows = bench_pier(args.scenario, args.sizes or [1.0], args.symmetry, args.ranks,
+                          args.out or "out/bench_pier")
+        return 0 if all(r["status"] == "complete" for r in rows) else 1
     from pilegroup.studies.verification import bench_verification
 
     bench_verification(out_dir=args.out or "out/bench_verification")
@@ -194,10 +201,15 @@ def _cmd_bench(args: argparse.Namespace) -> int:
 
 
 def _bench_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("what", choices=["constitutive", "meshing", "verification"])
+    p.add_argument("what", choices=["constitutive", "meshing", "verification", "pier"])
     p.add_argument("--sizes", type=float, nargs="*", default=None, metavar="H",
-                   help="meshing: pile-surface sizes in m (default: the paper's five)")
-    p.add_argument("--out", default=None, help="verification: output folder")
+                   help="meshing: pile-surface sizes in m (default: the paper's five); "
+                   "pier: the sizes to run (default: 1.0)")
+    p.add_argument("--out", default=None, help="verification, pier: output folder")
+    p.add_argument("--scenario", default="pier667", help="pier: the scenario to run")
+    p.add_argument("--symmetry", nargs="*", default=["auto"],
+                   help="pier: the numerics.symmetry values to run (default: auto)")
+    p.add_argument("--ranks", type=int, default=2, help="pier: MPI ranks of each run")
     p.set_defaults(func=_cmd_bench)
 
 

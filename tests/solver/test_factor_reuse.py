@@ -27,8 +27,9 @@ def test_direct_reuse_matches_direct(tmp_path, monkeypatch, mode, small_pile):
         log = run_stages(pb, pier.solver_stages(sc), pier.time_stepping(sc),
                          geostatic_tol=pier.GEOSTATIC_TOL_M)
         out[preset] = (probe(), log.newton_total, pb.refactorisations)
-    w_direct, newton_direct, _ = out["direct"]
+    w_direct, newton_direct, factors_direct = out["direct"]
     w_reuse, newton_reuse, factors = out["direct_reuse"]
     assert w_reuse == pytest.approx(w_direct, rel=1e-8)
     assert newton_reuse == newton_direct  # Newton itself is unchanged
     assert 1 <= factors < newton_reuse  # fewer factorisations than Newton iterations
+    assert factors_direct >= newton_direct  # direct: one per assembled Newton matrix
