@@ -185,6 +185,8 @@ def _vertex_to_dof(V: fem.FunctionSpace) -> np.ndarray:
     nv = msh.topology.index_map(0).size_local + msh.topology.index_map(0).num_ghosts
     out = np.full(nv, -1, dtype=np.int64)
     nc = msh.topology.index_map(tdim).size_local + msh.topology.index_map(tdim).num_ghosts
+    if nc == 0:  # a rank without cells of this mesh (e.g. no interface facets)
+        return out
     dm = V.dofmap.list[:nc]
     nper = dm.shape[1]
     if nper != c2v.offsets[1] - c2v.offsets[0]:

@@ -47,6 +47,7 @@ from pilegroup.constitutive.base import ConstitutiveLaw
 from pilegroup.geometry import groups
 from pilegroup.geometry.meshdata import MeshData
 from pilegroup.solver.layout import BodySplit
+from pilegroup.solver.qpstate import guarded_update
 
 #: Subdomain ids of the interface measure.
 SHAFT, BASE = 1, 2
@@ -156,6 +157,7 @@ class NodalInterface:
         self._jump_committed = np.zeros_like(self.jump.x.array)
         self._u_struct: fem.Function | None = None
         self._jump_form: fem.Form | None = None
+        self.last_error = ""  # message of the last law failure on this rank
 
     # ---------- setup helpers ----------
     def _build_groups(self, md: MeshData, ents: list, traction0: Callable,
@@ -275,17 +277,20 @@ class NodalInterface:
 
     def update(self, u_struct: fem.Function, u_soil: fem.Function, dt: float) -> None:
         """Evaluate every group's law at the current jump; fill the traction and tangent."""
+        self.last_error = ""
         jump = self.compute_jump(u_struct, u_soil).reshape(-1, 3)
         d_jump = jump - self._jump_committed.reshape(-1, 3)
         T = np.zeros_like(jump)
         D = np.zeros((jump.shape[0], 3, 3))
-        for g in self.groups:
+        for m, g in enumerate(self.groups):
             nodes = g["nodes"]
             if nodes.size == 0:
                 continue
             R = g["R"]
             d_loc = np.einsum("nij,nj->ni", R, d_jump[nodes])
-            t_loc, trial, D_loc = g["law"].update(d_loc, g["state"], dt)
+            t_loc, trial, D_loc, error = guarded_update(g["law"], d_loc, g["state"], dt)
+            if error:
+                self.last_error = f"interface group {m}: {error}"
             g["trial"] = trial
             w = g["w"]
             c = np.ones((nodes.size, 3))

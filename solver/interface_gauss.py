@@ -18,6 +18,7 @@ from petsc4py import PETSc
 
 from pilegroup.geometry.meshdata import MeshData
 from pilegroup.solver.interface import BASE, SHAFT, NodalInterface
+from pilegroup.solver.qpstate import guarded_update
 
 # 2 x 2 Gauss rule on the unit square (s, t) in [0, 1]^2, weights 1/4, and the bilinear shape
 # functions of the facet nodes in basix's tensor order (s, t) = (0,0), (1,0), (0,1), (1,1).
@@ -131,16 +132,19 @@ class GaussInterface(NodalInterface):
 
     def update(self, u_struct: fem.Function, u_soil: fem.Function, dt: float) -> None:
         """Evaluate every group's law at its Gauss points; fill ``T`` and the facet tangents."""
+        self.last_error = ""
         jump = self.compute_jump(u_struct, u_soil).reshape(-1, 3)
         d_jump = jump - self._jump_committed.reshape(-1, 3)
         F = np.zeros_like(jump)
-        for g in self.groups:
+        for m, g in enumerate(self.groups):
             nf = g["fnodes"].shape[0]
             if nf == 0:
                 continue
             R = g["R"]
             d_loc = np.einsum("nij,nj->ni", R, self._at_points(g, d_jump))
-            t_loc, trial, D_loc = g["law"].update(d_loc, g["state"], dt)
+            t_loc, trial, D_loc, error = guarded_update(g["law"], d_loc, g["state"], dt)
+            if error:
+                self.last_error = f"interface group {m}: {error}"
             g["trial"] = trial
             t = np.einsum("nji,nj->ni", R, t_loc).reshape(nf, 4, 3) * g["wJ"][:, :, None]
             np.add.at(F, g["fnodes"], np.einsum("ga,fgi->fai", _NG, t))

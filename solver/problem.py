@@ -298,7 +298,8 @@ class BiotProblem:
         if self.interface is not None:
             ok = bool(np.all(np.isfinite(self.interface.T.x.array)))
             if not self.comm.allreduce(ok, op=MPI.LAND):
-                raise ConvergenceError("NaN/inf traction from the interface law")
+                raise ConvergenceError("NaN/inf traction from the interface law "
+                                       f"{self.interface.last_error}".rstrip())
         self.assemble_residual()
         rn = self.layout.block_norms(self.b)
         if not np.all(np.isfinite(rn)):

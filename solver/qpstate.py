@@ -99,15 +99,9 @@ class QuadratureState:
                 g.state_trial = {k: v.copy() for k, v in g.state_n.items()}
                 continue
             de = self.expr_strain.eval(self.mesh, g.cells).reshape(-1, 6)
-            try:
-                stress, trial, tangent = g.material.law.update(de, g.state_n, dt)
-            except (ValueError, ArithmeticError, np.linalg.LinAlgError) as exc:
-                # a failing law on one rank must not desynchronise the ranks: mark it with NaN
-                # and let the collective all_finite() reject the iteration everywhere
-                self.last_error = f"{g.name}: {exc}"
-                stress = np.full((g.n, 6), np.nan)
-                trial = {k: v.copy() for k, v in g.state_n.items()}
-                tangent = np.zeros((g.n, 6, 6))
+            stress, trial, tangent, error = guarded_update(g.material.law, de, g.state_n, dt)
+            if error:
+                self.last_error = f"{g.name}: {error}"
             g.state_trial = trial
             self._write(g, stress, tangent)
 
@@ -149,6 +143,24 @@ class QuadratureState:
             k = a.shape[1]
             out[g.name] = (g.cells, np.einsum("cqk,q->ck", a.reshape(-1, self.nqp, k), w))
         return out
+
+
+def guarded_update(law: ConstitutiveLaw, increment: np.ndarray, state_n: dict[str, np.ndarray],
+                   dt: float) -> tuple[np.ndarray, dict[str, np.ndarray], np.ndarray, str]:
+    """``law.update`` that never raises: a failure gives NaN values and its message.
+
+    A law that fails on one rank (e.g. a return mapping that does not converge) must not
+    desynchronise the ranks: its NaN output is caught by the collective finiteness check of the
+    residual, which rejects the iteration everywhere (the step is then cut back).
+    Returns ``(values, trial state, tangent, error message or "")``.
+    """
+    try:
+        values, trial, tangent = law.update(increment, state_n, dt)
+        return values, trial, tangent, ""
+    except (ValueError, ArithmeticError, np.linalg.LinAlgError) as exc:
+        n, k = increment.shape
+        trial = {key: v.copy() for key, v in state_n.items()}
+        return np.full((n, k), np.nan), trial, np.zeros((n, k, k)), str(exc)
 
 
 def _is_linear(law: ConstitutiveLaw) -> bool:

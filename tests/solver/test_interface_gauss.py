@@ -15,6 +15,7 @@ import ufl
 from dolfinx import fem, la, mesh
 from mpi4py import MPI
 
+from pilegroup.errors import ConstitutiveError
 from pilegroup.geometry.meshdata import MeshData
 from pilegroup.solver import (
     BiotProblem,
@@ -147,14 +148,15 @@ def test_gauss_points_weights_and_nodal_output():
                                rtol=1e-12)
 
 
-def _problem(quadrature="gauss", pair="Q1Q1"):
+def _problem(quadrature="gauss", pair="Q1Q1", law=None):
     md = box(MPI.COMM_WORLD)
     from pilegroup.constitutive.soil import LinearElastic
 
     soil = SoilMaterial(LinearElastic(1.0e2, 0.3), 1e-3, 0.4, gamma_sat=18.0, K0=0.5)
     bcs = [DisplacementBC(f, c) for f in ("xmin", "xmax") for c in range(3)]
     bcs.append(DisplacementBC("pile_front", 1))
-    laws = (CubicSprings(), CubicSprings(), None, None)
+    law = law or CubicSprings()
+    laws = (law, law, None, None)
     return BiotProblem(md, {"pile_1": ElasticSolid(1.0e2, 0.2), "soil_layer_01": soil,
                             "soil_layer_02": soil}, Discretisation(pair=pair),
                        displacement_bcs=bcs, pressure_bcs=[PressureBC(None)],
@@ -209,6 +211,26 @@ def test_gauss_jacobian_matches_finite_differences():
     without = norm(fd - Jv.array) / norm(jv)
     print(f"FD check without the interface matrix: {without:.3e}")
     assert without > 0.5
+
+
+class FailsOnRankZero(CubicSprings):
+    """Raises like a return mapping that does not converge, on rank 0 only."""
+
+    def update(self, d, state_n, dt):
+        if MPI.COMM_WORLD.rank == 0 and len(d):
+            raise ConstitutiveError("return mapping did not converge in 100 iterations")
+        return super().update(d, state_n, dt)
+
+
+@pytest.mark.parametrize("quadrature", ["nodal", "gauss"])
+def test_a_law_failing_on_one_rank_rejects_the_step_everywhere(quadrature):
+    pb = _problem(quadrature, law=FailsOnRankZero())
+    info = pb.solve_step(1.0, 1.0)  # collective: every rank returns (no hang), none converges
+    assert not info.converged
+    assert "NaN/inf traction from the interface law" in info.message
+    if MPI.COMM_WORLD.rank == 0:
+        assert "return mapping did not converge" in info.message
+    pb.rollback()
 
 
 def test_gauss_needs_q1_and_a_valid_name():
