@@ -11,6 +11,7 @@ import json
 import logging
 import os
 import sys
+import traceback
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -273,6 +274,23 @@ def main(argv: Sequence[str] | None = None) -> int:
     except PilegroupError as exc:
         print(f"pilegroup: failed: {exc}", file=sys.stderr)
         return EXIT_FAILED
+    except Exception as exc:  # a failure that may be one rank's alone: end every rank
+        return _abort(exc, args.verbose)
+
+
+def _abort(exc: Exception, verbose: bool) -> int:
+    """One line naming the rank and the error; under MPI every rank is ended (no hang)."""
+    from mpi4py import MPI
+
+    comm = MPI.COMM_WORLD
+    where = f"rank {comm.rank} of {comm.size}" if comm.size > 1 else "run"
+    if verbose:
+        traceback.print_exc()
+    print(f"pilegroup: {where} failed: {type(exc).__name__}: {exc}", file=sys.stderr,
+          flush=True)
+    if comm.size > 1:
+        comm.Abort(EXIT_FAILED)
+    return EXIT_FAILED
 
 
 if __name__ == "__main__":

@@ -10,10 +10,12 @@ from typing import Any
 
 from mpi4py import MPI
 
+from pilegroup.errors import PilegroupError
 from pilegroup.fileio import write_json_atomic
 from pilegroup.geometry.adapter import geometry_spec
 from pilegroup.geometry.convert import build_mesh
 from pilegroup.geometry.output import mesh_outputs
+from pilegroup.geometry.spec import GeometrySpec
 from pilegroup.model import Scenario
 from pilegroup.studies.pier import run_coupled
 from pilegroup.studies.report import write_report
@@ -28,6 +30,8 @@ def run_scenario(sc: Scenario, out: Path, mesh_size: float | None = None,
     Validate, write the resolved scenario (``scenario.json``), build the mesh once and write
     its outputs (``mesh/``: XDMF with tags, PNG renders, counts and quality), run every stage
     on it (unless ``stop_after = "mesh"``), write ``summary.json`` and the report's plots.
+    ``summary.json`` is always written: ``status`` is ``complete`` or ``failed`` (with the
+    reason); the files of every output time reached stay complete.
     """
     t0 = time.perf_counter()
     if mesh_size is not None:
@@ -37,12 +41,27 @@ def run_scenario(sc: Scenario, out: Path, mesh_size: float | None = None,
         out.mkdir(parents=True, exist_ok=True)
         write_json_atomic(out / "scenario.json", sc)
     spec = geometry_spec(sc)
+    try:
+        summary = _run(sc, spec, out, stop_after, comm, t0)
+    except Exception as exc:
+        _write_failure(out, sc, comm, exc, t0)
+        raise
+    if comm.rank == 0 and summary["solver"] is not None and sc.outputs.plots:
+        for path in write_report(out):
+            log.info("wrote %s", path)
+    return summary
+
+
+def _run(sc: Scenario, spec: GeometrySpec, out: Path, stop_after: str, comm: MPI.Comm,
+         t0: float) -> dict[str, Any]:
+    """Mesh and solve; writes ``summary.json`` with ``status = "complete"``."""
     t_mesh = time.perf_counter()
     md = build_mesh(spec, comm)
     mesh = mesh_outputs(md, spec, out / "mesh", t0=t_mesh)
     solved = run_coupled(sc, md, out) if stop_after == "solve" else None
     summary: dict[str, Any] = {
         "scenario": sc.name,
+        "status": "complete",
         "stages_done": ["validate", "mesh"] + ([st.name for st in sc.stages] if solved else []),
         "solver": solved,
         "mesh": {k: mesh[k] for k in ("h_m", "cells", "vertices", "min_scaled_jacobian",
@@ -53,7 +72,22 @@ def run_scenario(sc: Scenario, out: Path, mesh_size: float | None = None,
     if comm.rank == 0:
         write_json_atomic(out / "summary.json", summary)
         log.info("wrote %s", out / "summary.json")
-        if solved is not None and sc.outputs.plots:
-            for path in write_report(out):
-                log.info("wrote %s", path)
     return summary
+
+
+def _write_failure(out: Path, sc: Scenario, comm: MPI.Comm, exc: BaseException,
+                   t0: float) -> None:
+    """``summary.json`` with ``status = "failed"`` and the reason.
+
+    A :class:`~pilegroup.errors.PilegroupError` is raised on every rank alike (rank 0 writes);
+    any other exception may be one rank's alone, so that rank writes.
+    """
+    collective = isinstance(exc, PilegroupError)
+    if collective and comm.rank != 0:
+        return
+    write_json_atomic(out / "summary.json", {
+        "scenario": sc.name, "status": "failed",
+        "reason": f"{type(exc).__name__}: {exc}",
+        "rank": None if collective else comm.rank, "ranks": comm.size,
+        "wall_s": time.perf_counter() - t0,
+        "solver_summary": "summary_solver.json (written up to the last output time)"})

@@ -1,0 +1,56 @@
+"""A failure on one rank ends every rank with one line and a failed summary (no hang)."""
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+BIN = Path(sys.executable).parent
+
+#: A run whose solve raises on rank 1 only while rank 0 waits in a collective call: without
+#: the abort, rank 0 would wait for ever.
+SCRIPT = r"""
+import sys
+from mpi4py import MPI
+from pilegroup.studies import cli, run
+
+def solve_on_one_rank(*args, **kwargs):
+    if MPI.COMM_WORLD.rank == 1:
+        raise IndexError("index 7 is out of bounds (only on this rank)")
+    MPI.COMM_WORLD.barrier()
+
+run.run_coupled = solve_on_one_rank
+sys.exit(cli.main(["run", sys.argv[1], "--out", sys.argv[2]]))
+"""
+
+
+@pytest.mark.mpi
+def test_one_rank_failure_ends_every_rank(tmp_path, small_pile, monkeypatch):
+    monkeypatch.setenv("PILEGROUP_MESH_CACHE", str(tmp_path / "cache"))
+    out = tmp_path / "run"
+    r = subprocess.run([str(BIN / "mpirun"), "-n", "2", sys.executable, "-c", SCRIPT,
+                        small_pile, str(out)], capture_output=True, text=True, timeout=300)
+    assert r.returncode != 0
+    lines = [ln for ln in r.stderr.splitlines() if ln.startswith("pilegroup:")]
+    assert lines == ["pilegroup: rank 1 of 2 failed: IndexError: index 7 is out of bounds "
+                     "(only on this rank)"], r.stderr[-2000:]
+    s = json.loads((out / "summary.json").read_text())
+    assert s["status"] == "failed" and s["rank"] == 1 and "IndexError" in s["reason"]
+    assert (out / "scenario.json").is_file() and (out / "mesh" / "mesh.xdmf").is_file()
+
+
+def test_collective_failure_writes_failed_summary(tmp_path, small_pile, monkeypatch):
+    from pilegroup.errors import StepFailure
+    from pilegroup.studies import cli, run
+
+    def fail(*args, **kwargs):
+        raise StepFailure("stage 'load': step at t = 0.5 day failed")
+
+    monkeypatch.setenv("PILEGROUP_MESH_CACHE", str(tmp_path / "cache"))
+    monkeypatch.setattr(run, "run_coupled", fail)
+    assert cli.main(["run", small_pile, "--out", str(tmp_path / "run")]) == 1
+    s = json.loads((tmp_path / "run" / "summary.json").read_text())
+    assert s["status"] == "failed" and s["rank"] is None
+    assert s["reason"] == "StepFailure: stage 'load': step at t = 0.5 day failed"
