@@ -229,9 +229,8 @@ class GeometrySpec:
     def __post_init__(self) -> None:
         object.__setattr__(self, "layers", tuple(self.layers))
         object.__setattr__(self, "piles", tuple(self.piles))
-        self._check_layers()
-        self._check_piles()
-        self._check_symmetry()
+        for check in (self._check_layers, self._check_piles, self._check_symmetry):
+            check()
 
     # -- validation ---------------------------------------------------------------------------
     def _check_layers(self) -> None:
