@@ -1,13 +1,23 @@
-"""Scenario -> :class:`~pilegroup.geometry.spec.GeometrySpec` (the one place that maps them)."""
+"""Scenario -> :class:`~pilegroup.geometry.spec.GeometrySpec` (the one place that maps them).
+
+``numerics.symmetry`` is resolved here. A scenario's loads are always uniform (a pressure on the
+cap top, or on the pile heads without a cap), its layers horizontal and its block centred with
+the same supports on opposite sides, so the model is mirror-symmetric about a plane exactly
+when its pile layout and cap are (:func:`GeometrySpec.symmetry_planes
+<pilegroup.geometry.spec.GeometrySpec.symmetry_planes>`).
+"""
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 from pilegroup.geometry import spec
+from pilegroup.geometry import symmetry as sym
 from pilegroup.model import Scenario
 
 
-def geometry_spec(sc: Scenario, mesh_size: float | None = None) -> spec.GeometrySpec:
-    """The geometry and mesh sizing of scenario ``sc`` (``mesh_size`` overrides h, m)."""
+def _full_spec(sc: Scenario, mesh_size: float | None) -> spec.GeometrySpec:
+    """The whole model of scenario ``sc`` (``mesh_size`` overrides h, m)."""
     m = sc.numerics.mesh
     sizing = spec.MeshSizing(
         h_pile=m.size_m if mesh_size is None else mesh_size,
@@ -33,3 +43,49 @@ def geometry_spec(sc: Scenario, mesh_size: float | None = None) -> spec.Geometry
         cap=cap,
         sizing=sizing,
     )
+
+
+def _resolve(sc: Scenario, full: spec.GeometrySpec) -> tuple[sym.Symmetry, str]:
+    """(mode, reason) of ``numerics.symmetry`` for the whole model ``full``.
+
+    Raises :class:`~pilegroup.errors.ScenarioError` naming ``numerics.symmetry`` when an
+    explicit mode cuts at a plane the model is not symmetric about.
+    """
+    asked = sc.numerics.symmetry
+    planes = full.symmetry_planes()
+    whys = [f"{a} = 0 ({sym.asymmetry(full.piles, full.cap, a)})"
+            for a in ("x", "y") if a not in planes]
+    if asked == "auto":
+        mode = sym.mode_of(planes)
+        if not planes:
+            return mode, "auto: the full model, not mirror-symmetric about " + " nor ".join(whys)
+        reason = (f"auto: pile layout, cap, block and load mirror-symmetric about "
+                  f"{sym.describe_planes(planes)}")
+        return mode, reason + "".join(f"; not about {w}" for w in whys)
+    replace(full, symmetry=asked)  # validates: the error names numerics.symmetry
+    if asked == "none":
+        return "none", "numerics.symmetry = 'none': the full model"
+    return asked, (f"numerics.symmetry = '{asked}': pile layout, cap, block and load "
+                   f"mirror-symmetric about {sym.describe_planes(sym.PLANES[asked])}")
+
+
+def resolve_symmetry(sc: Scenario) -> tuple[str, str]:
+    """The model part scenario ``sc`` uses, and why in words (for the run summary).
+
+    ``numerics.symmetry = "auto"`` picks ``quarter`` when the scenario is mirror-symmetric about
+    x = 0 and y = 0, ``half_x`` / ``half_y`` when about one of them, else ``none``; an explicit
+    value must be one the scenario allows (else :class:`~pilegroup.errors.ScenarioError` naming
+    ``numerics.symmetry``). Returns e.g. ``("quarter", "auto: pile layout, cap, block and load
+    mirror-symmetric about x = 0 and y = 0")``.
+    """
+    return _resolve(sc, _full_spec(sc, None))
+
+
+def geometry_spec(sc: Scenario, mesh_size: float | None = None) -> spec.GeometrySpec:
+    """The geometry and mesh sizing of scenario ``sc`` (``mesh_size`` overrides h, m).
+
+    ``symmetry`` is ``numerics.symmetry`` resolved by :func:`resolve_symmetry`.
+    """
+    full = _full_spec(sc, mesh_size)
+    mode, _ = _resolve(sc, full)
+    return full if mode == "none" else replace(full, symmetry=mode)

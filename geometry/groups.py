@@ -16,6 +16,8 @@ ground_surface        2      6            soil top (z = 0) not under the cap or 
 cap_bottom            2      7            cap bottom facets touching soil (z = 0)
 cap_top               2      8            cap top, z = cap thickness
 cap_side              2      9            cap vertical sides
+sym_x                 2      10           symmetry plane x = 0 of a reduced model (all cells)
+sym_y                 2      11           symmetry plane y = 0 of a reduced model (all cells)
 base_p{i}             2      100 + i      pile toe facets (pile / soil), z = -L_i
 head_p{i}             2      400 + i      pile head on the ground (only without a cap)
 embed_p{i}            2      700 + i      pile / cap facets (embedded part: sides and top)
@@ -35,9 +37,14 @@ SIDES = (SIDE_XMIN, SIDE_XMAX, SIDE_YMIN, SIDE_YMAX)
 BOTTOM = "bottom"
 GROUND = "ground_surface"
 CAP_BOTTOM, CAP_TOP, CAP_SIDE = "cap_bottom", "cap_top", "cap_side"
-#: Fixed facet tags of the named block and cap faces.
+#: Symmetry planes of a reduced model (``GeometrySpec.symmetry``): x = 0 and y = 0. A reduced
+#: model keeps x >= 0 (y >= 0); the plane replaces ``side_xmin`` (``side_ymin``).
+SYM_X, SYM_Y = "sym_x", "sym_y"
+#: Facet group of the symmetry plane normal to axis "x" (the plane x = 0) or "y" (y = 0).
+SYM_PLANES = {"x": SYM_X, "y": SYM_Y}
+#: Fixed facet tags of the named block, cap and symmetry-plane faces.
 FACET_TAGS = {SIDES[0]: 1, SIDES[1]: 2, SIDES[2]: 3, SIDES[3]: 4, BOTTOM: 5,
-              GROUND: 6, CAP_BOTTOM: 7, CAP_TOP: 8, CAP_SIDE: 9}
+              GROUND: 6, CAP_BOTTOM: 7, CAP_TOP: 8, CAP_SIDE: 9, SYM_X: 10, SYM_Y: 11}
 #: Most soil layers and most piles a mesh may have: up to these counts every tag of the table
 #: above is distinct (pile cells 101..199 lie between the layers and the cap, and so on).
 MAX_LAYERS = MAX_PILES = 99

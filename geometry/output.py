@@ -95,7 +95,8 @@ def _region_colors(region: np.ndarray) -> np.ndarray:
 def render_png(msh: str | Path, spec: GeometrySpec, out_dir: str | Path) -> list[Path]:
     """Render ``plan.png`` (plan view near the piles) and ``cutaway.png`` (3D cut-away).
 
-    Serial (call it on one rank); pyvista off screen, no display needed.
+    The cut-away is cut at the first pile row, or shows the plane y = 0 of a model reduced by
+    symmetry about it. Serial (call it on one rank); pyvista off screen, no display needed.
     """
     pv.OFF_SCREEN = True
     out = Path(out_dir)
@@ -103,6 +104,8 @@ def render_png(msh: str | Path, spec: GeometrySpec, out_dir: str | Path) -> list
     grid = _grid_from_msh(Path(msh))
     grid.cell_data["colour"] = _region_colors(grid.cell_data["region"])
     x0, x1, y0, y1 = spec.structured_region()
+    planes = spec.cut_planes()
+    x0, y0 = (0.0 if "x" in planes else x0), (0.0 if "y" in planes else y0)
     pad = max(3.0, 0.3 * max(x1 - x0, y1 - y0))
     files = []
 
@@ -125,16 +128,20 @@ def render_png(msh: str | Path, spec: GeometrySpec, out_dir: str | Path) -> list
     # 3D cut-away: the upper part of the pile group cut by the plane y = first pile row
     zb = -min(spec.block.depth, max(20.0, 0.35 * max(p_.length_in_soil for p_ in spec.piles)))
     zt = spec.cap.thickness if spec.cap is not None else 0.0
-    y_cut = min(p_.y for p_ in spec.piles)
     w = 2.5 * pad
-    box = grid.clip_box((x0 - w, x1 + w, y0 - w, y_cut, zb, zt + 1), invert=False)
+    if "y" in planes:  # the model's side y = 0 is the cut, seen from y < 0
+        y_cut, look, y_range = 0.0, -1.0, (0.0, y1 + w)
+    else:
+        y_cut, look = min(p_.y for p_ in spec.piles), 1.0
+        y_range = (y0 - w, y_cut)
+    box = grid.clip_box((x0 - w, x1 + w, *y_range, zb, zt + 1), invert=False)
     p = pv.Plotter(off_screen=True, window_size=(1400, 1100))
     p.add_mesh(box, scalars="colour", show_edges=True, cmap="tab20", show_scalar_bar=False,
                edge_color="#333333", line_width=0.5)
     cx, cz = 0.5 * (x0 + x1), 0.5 * (zb + zt)
     dist = 1.6 * max(x1 - x0 + 2 * w, zt - zb)
-    p.camera_position = [(cx + 0.45 * dist, y_cut + dist, cz + 0.55 * dist),
-                         (cx, y_cut - 0.3 * w, cz), (0.0, 0.0, 1.0)]
+    p.camera_position = [(cx + 0.45 * dist, y_cut + look * dist, cz + 0.55 * dist),
+                         (cx, y_cut - look * 0.3 * w, cz), (0.0, 0.0, 1.0)]
     p.add_text(f"cut-away at y = {y_cut:g} m, z >= {zb:g} m, h = {spec.sizing.h_pile:g} m",
                font_size=12)
     f = out / "cutaway.png"
@@ -173,6 +180,8 @@ def mesh_outputs(md: MeshData, spec: GeometrySpec, out_dir: str | Path, render: 
     info = md.info
     summary: dict[str, Any] = {
         "h_m": spec.sizing.h_pile,
+        "symmetry": spec.symmetry,
+        "piles_meshed": list(spec.kept_piles()),
         "cells": info["num_cells"],
         "vertices": info["num_vertices"],
         "hexahedra_gmsh": info["n_hex"],
@@ -205,8 +214,10 @@ def mesh_outputs(md: MeshData, spec: GeometrySpec, out_dir: str | Path, render: 
 def format_summary(s: dict[str, Any]) -> str:
     """Human-readable lines of a :func:`mesh_command` summary."""
     t = s["timings_s"]
+    part = ("" if s.get("symmetry", "none") == "none" else
+            f"{s['symmetry']} model (piles {', '.join(map(str, s['piles_meshed']))}): ")
     return "\n".join([
-        f"h = {s['h_m']:g} m: {s['cells']:,} hexahedra, {s['vertices']:,} vertices "
+        f"{part}h = {s['h_m']:g} m: {s['cells']:,} hexahedra, {s['vertices']:,} vertices "
         f"(plan {s['plan_quads']:,} quads x {s['vertical_divisions_soil']} soil layers of "
         f"elements + cap {s['vertical_divisions_cap']})",
         f"min scaled Jacobian {s['min_scaled_jacobian']:.3f}; {s['cell_groups']} cell groups, "

@@ -34,6 +34,7 @@ from pilegroup.geometry.groups import (
     CAP_TOP,
     GROUND,
     SIDES,
+    SYM_PLANES,
     base,
     embed,
     head,
@@ -51,6 +52,7 @@ from pilegroup.geometry.plan import (
     mesh_plan,
     set_far_field_size,
 )
+from pilegroup.geometry.plan_reduced import build_reduced_plan
 from pilegroup.geometry.spec import GeometrySpec
 from pilegroup.geometry.vertical import Segment, vertical_segments
 
@@ -171,7 +173,8 @@ def build_gmsh_model(spec: GeometrySpec, name: str = "pilegroup") -> BuildResult
     for key, val in GMSH_OPTIONS.items():
         gmsh.option.setNumber(key, val)
     gmsh.model.add(name)
-    surfaces, outline = build_plan(spec)
+    surfaces, outline = (build_plan(spec) if spec.symmetry == "none"
+                         else build_reduced_plan(spec))
     vol_group, soil_segs, cap_segs = _extrude_all(spec, surfaces)
     gmsh.model.geo.removeAllDuplicates()
     gmsh.model.geo.synchronize()
@@ -243,6 +246,9 @@ def _boundary(spec: GeometrySpec, name: str, f: int, bbox: tuple[float, ...],
     b = spec.block
     xmin, ymin, zmin, xmax, ymax, zmax = bbox
     if zmax - zmin > tol:  # vertical
+        for axis, lo, hi in (("x", xmin, xmax), ("y", ymin, ymax)):
+            if axis in spec.cut_planes() and abs(lo) < tol and abs(hi) < tol:
+                return SYM_PLANES[axis]
         if name == CAP:
             return CAP_SIDE
         offsets = (xmax + b.size_x / 2, xmin - b.size_x / 2, ymax + b.size_y / 2,

@@ -24,10 +24,17 @@ from pilegroup.geometry.spec import GeometrySpec, PileSpec
 
 __all__ = [
     "FAR_FIELD_ALGORITHMS",
+    "CellPiles",
     "PlanSurface",
+    "PlanView",
     "build_plan",
+    "cell_grid",
     "circumferential_divisions",
     "mesh_plan",
+    "outline_edge",
+    "pile_cell",
+    "progression",
+    "radial_edges",
     "set_far_field_size",
 ]
 
@@ -60,7 +67,7 @@ class PlanSurface:
     in_region: bool
 
 
-def _progression(length: float, first: float, last: float) -> tuple[int, float]:
+def progression(length: float, first: float, last: float) -> tuple[int, float]:
     """Edges and ratio of a geometric distribution of ``length`` (m) from ``first`` to ~``last``.
 
     Uniform (edges <= ``first``) when ``first >= last``.
@@ -94,7 +101,7 @@ def _progression(length: float, first: float, last: float) -> tuple[int, float]:
     return best[1], best[2]
 
 
-class _PlanView:
+class PlanView:
     """Points, curves and surfaces of the plan view in the geo kernel (shares coincident ones).
 
     Transfinite curve counts are collected and set once, after every surface exists.
@@ -106,9 +113,11 @@ class _PlanView:
         self.lines: dict[tuple[int, int], int] = {}
         self.coords: dict[int, tuple[float, float]] = {}
         self.surfaces: list[PlanSurface] = []
+        self.block_curves: list[list[int]] = []
         self.transfinite: dict[int, tuple[int, float]] = {}
 
     def point(self, x: float, y: float) -> int:
+        """The point at (x, y) m, z = 0 (an existing one within 1e-9 x scale)."""
         key = (round(x / self.scale * 1e9), round(y / self.scale * 1e9))
         if key not in self.points:
             self.points[key] = gmsh.model.geo.addPoint(x, y, 0.0)
@@ -116,6 +125,7 @@ class _PlanView:
         return self.points[key]
 
     def line(self, p: int, q: int) -> int:
+        """The straight curve from ``p`` to ``q`` (an existing one, negated when reversed)."""
         if (p, q) in self.lines:
             return self.lines[(p, q)]
         if (q, p) in self.lines:
@@ -125,13 +135,10 @@ class _PlanView:
         return tag
 
     def arc(self, p: int, centre: int, q: int) -> int:
+        """A new circle arc from ``p`` to ``q`` about ``centre`` (less than a half circle)."""
         tag = gmsh.model.geo.addCircleArc(p, centre, q)
         self.lines[(p, q)] = tag
         return tag
-
-    def length(self, p: int, q: int) -> float:
-        (x0, y0), (x1, y1) = self.coords[p], self.coords[q]
-        return math.hypot(x1 - x0, y1 - y0)
 
     def edges(self, curve: int, n_edges: int, coef: float = 1.0) -> None:
         """Make ``curve`` transfinite with ``n_edges`` edges (geometric ratio ``coef``)."""
@@ -144,6 +151,7 @@ class _PlanView:
         gmsh.model.geo.mesh.setTransfiniteSurface(s, "Left", corners)
         gmsh.model.geo.mesh.setRecombine(2, s)
         self.surfaces.append(PlanSurface(s, len(curves), pile, True))
+        self.block_curves.append(list(curves))
 
     def set_transfinite(self) -> None:
         """Set every collected transfinite curve in the gmsh model."""
@@ -157,7 +165,7 @@ def _breaks(vals: list[float], lo: float, hi: float) -> list[float]:
     return [lo, *((a + c) / 2 for a, c in zip(u[:-1], u[1:], strict=True)), hi]
 
 
-def _cell_grid(spec: GeometrySpec) -> tuple[list[float], list[float], CellPiles]:
+def cell_grid(spec: GeometrySpec) -> tuple[list[float], list[float], CellPiles]:
     """Cell edges in x and y of the structured region and the pile of each pile cell.
 
     Raises ``ValueError`` if two piles share a cell or a pile leaves less than 0.2 x its radius
@@ -183,7 +191,28 @@ def _cell_grid(spec: GeometrySpec) -> tuple[list[float], list[float], CellPiles]
     return xb, yb, cell_pile
 
 
-def _pile_cell(pv: _PlanView, spec: GeometrySpec, i: int, g: list[int], sides: list[int],
+def radial_edges(spec: GeometrySpec, p: PileSpec, corners: list[tuple[float, float]],
+                 n_circ: int) -> tuple[int, int, float]:
+    """Radial edges of pile ``p``'s o-grid: (inside the pile, outside it, outside ratio).
+
+    ``corners``: the cell's corners (m), counter-clockwise from the top right. Outside the pile
+    the edges start at ``h`` at the pile surface and grow towards the cell-side spacing.
+    """
+    r = p.radius
+    arc_len = 2 * math.pi * r / n_circ
+    m_in = max(2, round(0.45 * r / arc_len))
+    h = spec.sizing.h_pile
+    nq = n_circ // 4
+    side_h = min(math.hypot(corners[(k + 1) % 4][0] - corners[k][0],
+                            corners[(k + 1) % 4][1] - corners[k][1]) for k in range(4)) / nq
+    ang = [math.pi / 4 + k * math.pi / 2 for k in range(4)]
+    dlen = [math.hypot(corners[k][0] - (p.x + r * math.cos(a)),
+                       corners[k][1] - (p.y + r * math.sin(a))) for k, a in enumerate(ang)]
+    m_out, coef = progression(float(np.mean(dlen)), h, max(side_h, h))
+    return m_in, m_out, coef
+
+
+def pile_cell(pv: PlanView, spec: GeometrySpec, i: int, g: list[int], sides: list[int],
                n_circ: int) -> None:
     """The o-grid of the cell with corners ``g`` and sides ``sides`` around pile ``i`` (0-based).
 
@@ -201,17 +230,11 @@ def _pile_cell(pv: _PlanView, spec: GeometrySpec, i: int, g: list[int], sides: l
     sq_sides = [pv.line(sq[k], sq[(k + 1) % 4]) for k in range(4)]
     spokes = [pv.line(sq[k], q[k]) for k in range(4)]
     diags = [pv.line(q[k], g[k]) for k in range(4)]
-    arc_len = 2 * math.pi * r / n_circ
-    m_in = max(2, round(0.45 * r / arc_len))
+    m_in, m_out, coef = radial_edges(spec, p, [pv.coords[t] for t in g], n_circ)
     for k in range(4):
         pv.edges(arcs[k], nq)
         pv.edges(sq_sides[k], nq)
         pv.edges(spokes[k], m_in)
-    # radial edges outside the pile: start at h, grow towards the cell-side spacing
-    h = spec.sizing.h_pile
-    side_h = min(pv.length(g[k], g[(k + 1) % 4]) for k in range(4)) / nq
-    dlen = [pv.length(q[k], g[k]) for k in range(4)]
-    m_out, coef = _progression(float(np.mean(dlen)), h, max(side_h, h))
     for k in range(4):
         pv.edges(diags[k], m_out, coef)
     pv.block(sq_sides, sq, i + 1)
@@ -224,7 +247,7 @@ def _pile_cell(pv: _PlanView, spec: GeometrySpec, i: int, g: list[int], sides: l
         pv.block([arcs[k], diags[k1], -sides[k], -diags[k]], [q[k], q[k1], g[k1], g[k]], None)
 
 
-def _far_field(pv: _PlanView, spec: GeometrySpec, grid: dict[tuple[int, int], int],
+def _far_field(pv: PlanView, spec: GeometrySpec, grid: dict[tuple[int, int], int],
                nxb: int, nyb: int) -> list[int]:
     """The far field: the block rectangle minus the structured region, one recombined surface.
 
@@ -255,8 +278,8 @@ def build_plan(spec: GeometrySpec) -> tuple[list[PlanSurface], list[int]]:
     Returns the surfaces (the far field last) and the curves of the structured region's outline.
     """
     b = spec.block
-    pv = _PlanView(max(b.size_x, b.size_y))
-    xb, yb, cell_pile = _cell_grid(spec)
+    pv = PlanView(max(b.size_x, b.size_y))
+    xb, yb, cell_pile = cell_grid(spec)
     n_circ = circumferential_divisions(spec)
     grid = {(i, j): pv.point(xb[i], yb[j]) for i in range(len(xb)) for j in range(len(yb))}
     for ix in range(len(xb) - 1):
@@ -266,7 +289,7 @@ def build_plan(spec: GeometrySpec) -> tuple[list[PlanSurface], list[int]]:
             for s in sides:
                 pv.edges(s, n_circ // 4)
             if (ix, iy) in cell_pile:
-                _pile_cell(pv, spec, cell_pile[(ix, iy)], g, sides, n_circ)
+                pile_cell(pv, spec, cell_pile[(ix, iy)], g, sides, n_circ)
             else:
                 pv.block(sides, g, None)
     pv.set_transfinite()
@@ -274,7 +297,7 @@ def build_plan(spec: GeometrySpec) -> tuple[list[PlanSurface], list[int]]:
     return pv.surfaces, [abs(t) for t in outline]
 
 
-def _outline_edge(spec: GeometrySpec) -> float:
+def outline_edge(spec: GeometrySpec) -> float:
     """Mean edge size (m) of the structured region's outline."""
     x0, x1, y0, y1 = spec.structured_region()
     nq = circumferential_divisions(spec) // 4
@@ -291,7 +314,7 @@ def set_far_field_size(spec: GeometrySpec, outline: list[int]) -> None:
     fld.setNumbers(f_dist, "CurvesList", outline)
     fld.setNumber(f_dist, "Sampling", 20)
     f_math = fld.add("MathEval")
-    edge = _outline_edge(spec)
+    edge = outline_edge(spec)
     fld.setString(f_math, "F", f"Min({sz.h_far}, {edge} + {sz.growth - 1.0}*F{f_dist})")
     fld.setAsBackgroundMesh(f_math)
 

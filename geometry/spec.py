@@ -19,11 +19,13 @@ from dataclasses import asdict, dataclass, field, replace
 from typing import Any
 
 from pilegroup.errors import ScenarioError
+from pilegroup.geometry import symmetry as sym
 from pilegroup.geometry.groups import MAX_LAYERS, MAX_PILES
 from pilegroup.validate import (
     require_finite,
     require_in_range,
     require_non_negative,
+    require_one_of,
     require_positive,
 )
 
@@ -208,6 +210,13 @@ class GeometrySpec:
 
     Piles are numbered 1..n in the order given (physical groups ``pile_{i}``). Without a cap,
     every pile must have ``embedment == 0`` (its head is on the ground surface).
+
+    ``symmetry`` reduces the model to the part with ``x >= 0`` (``half_x``), ``y >= 0``
+    (``half_y``) or both (``quarter``); the geometry must be mirror-symmetric about each plane
+    it cuts at (:mod:`pilegroup.geometry.symmetry`). ``piles`` always lists the full model's
+    piles: the mesh holds the kept ones (:meth:`kept_piles`) under their full-model numbers,
+    a pile on a plane cut to :meth:`pile_fraction` of it; :meth:`mirror_of` maps every pile to
+    its kept mirror image.
     """
 
     block: BlockSpec
@@ -215,12 +224,13 @@ class GeometrySpec:
     piles: tuple[PileSpec, ...]
     cap: CapSpec | None = None
     sizing: MeshSizing = field(default_factory=MeshSizing)
+    symmetry: sym.Symmetry = "none"
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "layers", tuple(self.layers))
         object.__setattr__(self, "piles", tuple(self.piles))
-        self._check_layers()
-        self._check_piles()
+        for check in (self._check_layers, self._check_piles, self._check_symmetry):
+            check()
 
     # -- validation ---------------------------------------------------------------------------
     def _check_layers(self) -> None:
@@ -285,6 +295,47 @@ class GeometrySpec:
                                 f"the cap / pile region [{x0:g}, {x1:g}] x [{y0:g}, {y1:g}] m "
                                 "must lie strictly inside the block plan", "m")
 
+    def _check_symmetry(self) -> None:
+        require_one_of("numerics.symmetry", self.symmetry, sym.MODES)
+        for axis in self.cut_planes():
+            why = sym.asymmetry(self.piles, self.cap, axis)
+            if why is not None:
+                raise ScenarioError("numerics.symmetry", self.symmetry,
+                                    f"cuts at {axis} = 0, but the geometry is not mirror-"
+                                    f"symmetric about it: {why}; use 'none' or a plane the "
+                                    "geometry is symmetric about")
+
+    # -- symmetry -------------------------------------------------------------------------------
+    def symmetry_planes(self) -> tuple[str, ...]:
+        """Planes the geometry is mirror-symmetric about: ``"x"`` (x = 0), ``"y"`` (y = 0)."""
+        return tuple(a for a in ("x", "y") if sym.asymmetry(self.piles, self.cap, a) is None)
+
+    def cut_planes(self) -> tuple[str, ...]:
+        """Planes the model is cut at by ``symmetry`` (``()`` for the full model)."""
+        return sym.PLANES[self.symmetry]
+
+    def plan_bounds(self) -> tuple[float, float, float, float]:
+        """Plan rectangle (x0, x1, y0, y1) m of the modelled block: all, a half or a quarter."""
+        bx, by = self.block.size_x / 2, self.block.size_y / 2
+        planes = self.cut_planes()
+        return (0.0 if "x" in planes else -bx, bx, 0.0 if "y" in planes else -by, by)
+
+    def pile_fraction(self, i: int) -> float:
+        """Fraction of pile ``i`` (1-based, full-model number) in the mesh: 1, 1/2, 1/4 or 0."""
+        return sym.meshed_fraction(self.piles[i - 1], self.cut_planes())
+
+    def kept_piles(self) -> tuple[int, ...]:
+        """Numbers (1-based, full model) of the piles in the mesh, whole or cut."""
+        return tuple(i for i, p in enumerate(self.piles, start=1)
+                     if sym.is_kept(p, self.cut_planes()))
+
+    def mirror_of(self) -> dict[int, int]:
+        """Every pile number of the full model -> its mirror image among :meth:`kept_piles`.
+
+        Kept piles map to themselves; with ``symmetry = "none"`` every pile does.
+        """
+        return sym.mirror_map(self.piles, self.cut_planes())
+
     # -- derived data ---------------------------------------------------------------------------
     def structured_region(self) -> tuple[float, float, float, float]:
         """Plan rectangle (m) meshed with structured blocks (x0, x1, y0, y1).
@@ -326,8 +377,15 @@ class GeometrySpec:
         return asdict(self)
 
     def cache_key(self, extra: str = "") -> str:
-        """Hex digest identifying the geometry and mesh parameters (plus ``extra``)."""
-        payload = json.dumps(self.to_dict(), sort_keys=True, default=repr) + "|" + extra
+        """Hex digest identifying the geometry and mesh parameters (plus ``extra``).
+
+        ``symmetry`` enters the key only when it reduces the model: the full model's key is that
+        of its geometry and sizing alone.
+        """
+        data = self.to_dict()
+        if self.symmetry == "none":
+            del data["symmetry"]
+        payload = json.dumps(data, sort_keys=True, default=repr) + "|" + extra
         return hashlib.sha256(payload.encode()).hexdigest()[:20]
 
     @classmethod

@@ -11,7 +11,12 @@ from dataclasses import dataclass, field
 from typing import Literal
 
 from pilegroup.errors import ScenarioError
-from pilegroup.validate import require_in_range, require_non_negative, require_positive
+from pilegroup.validate import (
+    require_in_range,
+    require_non_negative,
+    require_one_of,
+    require_positive,
+)
 
 
 @dataclass(frozen=True)
@@ -195,6 +200,10 @@ class LinearSolver:
     options: dict[str, str | int | float | bool] = field(default_factory=dict)
 
 
+#: Values of ``numerics.symmetry``.
+SYMMETRY_CHOICES = ("auto", "none", "quarter", "half_x", "half_y")
+
+
 @dataclass(frozen=True)
 class Numerics:
     """Discretisation and solution controls.
@@ -203,11 +212,19 @@ class Numerics:
     pressure, m^3) is at most ``newton_rtol`` times that block's reference (the largest first
     residual of the run, for displacements also the norm of the internal force, which holds
     the geostatic stress) plus ``newton_atol``; ``time.max_newton`` iterations at most.
+
+    ``symmetry``: which part of the block is modelled. ``none``: all of it; ``half_x``: x >= 0
+    (mirror plane x = 0); ``half_y``: y >= 0; ``quarter``: both; ``auto`` (default): the
+    smallest part the scenario's mirror symmetry allows
+    (:func:`pilegroup.geometry.adapter.resolve_symmetry`). A plane must be one the pile layout
+    and the cap are mirror-symmetric about (the block is centred by construction, the loads are
+    uniform on the cap top or the pile heads).
     """
 
     element: Literal["Q2Q1", "Q1Q1"] = "Q2Q1"
     newton_rtol: float = 1.0e-8
     newton_atol: float = 1.0e-9
+    symmetry: Literal["auto", "none", "quarter", "half_x", "half_y"] = "auto"
     mesh: MeshOptions = field(default_factory=MeshOptions)
     time: TimeStepping = field(default_factory=TimeStepping)
     solver: LinearSolver = field(default_factory=LinearSolver)
@@ -215,6 +232,7 @@ class Numerics:
     def __post_init__(self) -> None:
         require_positive("newton_rtol", self.newton_rtol, "-")
         require_positive("newton_atol", self.newton_atol, "-")
+        require_one_of("symmetry", self.symmetry, SYMMETRY_CHOICES)
 
 
 @dataclass(frozen=True)

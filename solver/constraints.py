@@ -46,11 +46,11 @@ class Constraints:
         for bc in displacement_bcs:
             if bc.component not in (0, 1, 2):
                 raise SolverInputError(f"DisplacementBC.component = {bc.component}; allowed 0-2")
-            b = layout.body_of_facet(bc.facet)
             c = fem.Constant(mesh, default_scalar_type(0.0))
             self._u_consts.append((bc, c))
-            self._add(layout.facet_dofs(b, bc.facet, bc.component), b.V.sub(bc.component), c,
-                      b.u)
+            for b in layout.bodies_of_facet(bc.facet):  # all bodies the group touches
+                self._add(layout.facet_dofs(b, bc.facet, bc.component), b.V.sub(bc.component),
+                          c, b.u)
         for pbc in pressure_bcs:
             bc, bc0 = self._add(layout.pressure_dofs(pbc.facet), layout.Q,
                                 default_scalar_type(pbc.value), layout.p)

@@ -107,12 +107,17 @@ class XDMFSeries:
     pressure when it lives on a soil sub-mesh of a tied model. ``<stem>_structure.xdmf``: pile
     and cap displacement and stress (separate fields). ``<stem>_interface.xdmf``: interface
     fields on the pile-surface facets (see :meth:`NodalInterface.nodal_fields`).
+    ``label`` names the XDMF grids (ParaView shows it), e.g. the part a reduced model holds.
     """
 
-    def __init__(self, problem: BiotProblem, path: str | Path) -> None:
+    def __init__(self, problem: BiotProblem, path: str | Path, label: str | None = None) -> None:
         self.problem = problem
         self.path = Path(path)
         self.comm = problem.comm
+        if label is not None:  # the grid name ParaView shows (e.g. a reduced model's part)
+            for msh in {id(m): m for m in [b.mesh for b in problem.bodies]
+                        + [problem.p_mesh]}.values():
+                msh.name = label
         if self.comm.rank == 0:
             self.path.parent.mkdir(parents=True, exist_ok=True)
         self.comm.barrier()

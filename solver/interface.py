@@ -51,6 +51,8 @@ from pilegroup.solver.qpstate import guarded_update
 
 #: Subdomain ids of the interface measure.
 SHAFT, BASE = 1, 2
+#: Distance (m) within which a node lies on a mirror plane (the mesh puts them on it exactly).
+MIRROR_TOL = 1e-9
 
 
 def interface_entities(md: MeshData, split: BodySplit, kind: int) -> np.ndarray:
@@ -171,7 +173,13 @@ class NodalInterface:
         v = ufl.TestFunction(V_soil)
         n_plus = ufl.FacetNormal(md.mesh)("+")
         N = self._assemble_nodal(ufl.inner(n_plus, v("-")) * self.dS(SHAFT), V_soil).reshape(-1, 3)
-        groups: list[dict[str, Any]] = []
+        # On a mirror plane of a reduced model a node sees the facets of one side only; the
+        # whole ring's normal lies in the plane, so its component across the plane is zero.
+        xs = V_soil.tabulate_dof_coordinates()
+        for axis, plane in ((0, groups.SYM_X), (1, groups.SYM_Y)):
+            if plane in md.facet_names:
+                N[np.abs(xs[:, axis]) <= MIRROR_TOL, axis] = 0.0
+        points: list[dict[str, Any]] = []
         # Consistent initial tractions: traction0 is linear in z within a group, so its
         # phi_i-weighted mean over the group's facets is its value at the weighted height
         # zbar[i, m] = int_m z phi_i dS / W[i, m] (Gauss rule here: exact), and the lumped
@@ -198,10 +206,10 @@ class NodalInterface:
             law = self.laws[m]
             zbar = Zw[nodes, m] / self.W[nodes, m]
             state = law.initial_state(nodes.size, traction0(zbar, m)) if nodes.size else None
-            groups.append({"nodes": nodes, "R": R, "w": self.W[nodes, m] / self.A[nodes],
+            points.append({"nodes": nodes, "R": R, "w": self.W[nodes, m] / self.A[nodes],
                            "c_n": c_n[nodes] if m < L else np.ones(nodes.size),
                            "law": law, "state": state, "trial": state})
-        return groups
+        return points
 
     @staticmethod
     def _check_same_nodes(a: fem.FunctionSpace, b: fem.FunctionSpace) -> None:

@@ -234,17 +234,26 @@ class BlockLayout:
         """Local parent facets of facet group ``name``."""
         return self.md.facet_tags.find(self.md.facet_tag(name))
 
-    def body_of_facet(self, name: str) -> Body:
-        """The body whose cells carry the facet group ``name`` (collective)."""
-        if len(self.bodies) == 1:
-            return self.bodies[0]
+    def _facet_counts(self, name: str) -> np.ndarray:
+        """Number of facets of group ``name`` on each body's cells (all ranks; collective)."""
         tdim = self.mesh.topology.dim
         f2c = self.mesh.topology.connectivity(tdim - 1, tdim)
         cells = np.array([f2c.links(f)[0] for f in self.facets(name)], dtype=np.int32)
         counts = np.array([int(np.sum(self.split.is_structure[cells]
                                       == (b.name == "structure"))) for b in self.bodies])
-        counts = self.comm.allreduce(counts, op=MPI.SUM)
-        return self.bodies[int(np.argmax(counts))]
+        return self.comm.allreduce(counts, op=MPI.SUM)
+
+    def body_of_facet(self, name: str) -> Body:
+        """The body whose cells carry (most of) the facet group ``name`` (collective)."""
+        if len(self.bodies) == 1:
+            return self.bodies[0]
+        return self.bodies[int(np.argmax(self._facet_counts(name)))]
+
+    def bodies_of_facet(self, name: str) -> list[Body]:
+        """Every body with facets in group ``name`` (e.g. a symmetry plane cuts both)."""
+        if len(self.bodies) == 1:
+            return list(self.bodies)
+        return [b for b, n in zip(self.bodies, self._facet_counts(name), strict=True) if n > 0]
 
     def sub_facets(self, body: Body, facets: np.ndarray) -> np.ndarray:
         """Parent facets -> facets of ``body``'s sub-mesh (through an adjacent body cell).

@@ -13,7 +13,6 @@ heads when there is no cap).
 from __future__ import annotations
 
 import logging
-import math
 import time
 from pathlib import Path
 from typing import Any
@@ -23,7 +22,9 @@ from tqdm import tqdm
 from pilegroup.constitutive.interface import PileSoilInterface
 from pilegroup.constitutive.soil import DruckerPrager, LinearElastic, MohrCoulomb
 from pilegroup.geometry import groups
+from pilegroup.geometry.adapter import geometry_spec, resolve_symmetry
 from pilegroup.geometry.meshdata import MeshData
+from pilegroup.geometry.symmetry import PLANES
 from pilegroup.model import Scenario, ScenarioError
 from pilegroup.solver import (
     BiotProblem,
@@ -86,18 +87,15 @@ def build_problem(sc: Scenario, md: MeshData, preset: str | None = None,
     for name in md.cell_names:
         if groups.is_structure(name):
             materials[name] = solid
-    xmin, xmax, ymin, ymax = groups.SIDES
-    dbcs = [DisplacementBC(xmin, 0), DisplacementBC(xmax, 0),
-            DisplacementBC(ymin, 1), DisplacementBC(ymax, 1)]
+    # rollers on the block sides and on the symmetry planes of a reduced model (its flux is
+    # zero there, the natural condition of the mass balance)
+    rollers = ((groups.SIDE_XMIN, 0), (groups.SIDE_XMAX, 0), (groups.SIDE_YMIN, 1),
+               (groups.SIDE_YMAX, 1), (groups.SYM_X, 0), (groups.SYM_Y, 1))
+    dbcs = [DisplacementBC(f, c) for f, c in rollers if f in md.facet_names]
     dbcs += [DisplacementBC(groups.BOTTOM, c) for c in range(3)]
     names = load_facets(sc, md)
-    area = (sc.cap.size_x_m * sc.cap.size_y_m if sc.cap is not None
-            else sc.piles.count * math.pi * sc.piles.diameter_m ** 2 / 4)
-    # The polygonal pile heads are slightly smaller than the circle: use the meshed area so the
-    # resultant is exactly the scenario's load.
-    area = facet_area(md, names) if sc.cap is None else area
-    q = sc.total_cap_load() / area
-    loads = [SurfaceLoad(f, q) for f in names]
+    loads = [SurfaceLoad(f, sc.total_cap_load() / full_load_area(sc, md, mesh_size))
+             for f in names]
     disc = Discretisation(sc.numerics.element)
     p = preset or sc.numerics.solver.preset
     if p == "auto":
@@ -109,6 +107,21 @@ def build_problem(sc: Scenario, md: MeshData, preset: str | None = None,
     return BiotProblem(md, materials, disc, displacement_bcs=dbcs,
                        pressure_bcs=[PressureBC(groups.GROUND)], loads=loads, options=opts,
                        interface=interface_coupling(sc, mesh_size))
+
+
+def full_load_area(sc: Scenario, md: MeshData, mesh_size: float | None = None) -> float:
+    """Area (m^2) of the loaded top of the whole foundation (cap top, or every pile head).
+
+    With a cap, its plan area. Without one, the meshed pile heads (polygons slightly smaller
+    than circles, so that the resultant is exactly the scenario's load), each divided by the
+    fraction of its pile in a symmetry-reduced mesh. A uniform pressure of total load / this
+    area then carries the reduced model's share of the load.
+    """
+    if sc.cap is not None:
+        return sc.cap.size_x_m * sc.cap.size_y_m
+    spec = geometry_spec(sc, mesh_size)
+    return sum(facet_area(md, [n]) / spec.pile_fraction(groups.head_of(n))
+               for n in load_facets(sc, md))
 
 
 def interface_law(sc: Scenario, j: int, mesh_size: float) -> PileSoilInterface | None:
@@ -176,6 +189,19 @@ def time_stepping(sc: Scenario) -> TimeStepping:
                         milestones=tuple(x for x in sc.time.output_days if x > 0))
 
 
+def xdmf_label(symmetry: str) -> str | None:
+    """XDMF grid name of a reduced model: the part it holds and how to see the whole.
+
+    The files hold the reduced domain (smaller files; ParaView's Reflect filter about the named
+    planes shows the whole foundation); ``None`` (the default name) for the full model.
+    """
+    planes = PLANES[symmetry]
+    if not planes:
+        return None
+    part = "_".join(f"{a}_ge_0" for a in planes)
+    return f"{symmetry}_model_{part}_reflect_about_" + "_and_".join(f"{a}0" for a in planes)
+
+
 def run_coupled(sc: Scenario, md: MeshData, out: Path, preset: str | None = None,
                 mesh_size: float | None = None) -> dict[str, Any]:
     """Run every stage of ``sc`` on ``md`` with the scenario's exports; returns the summary.
@@ -186,6 +212,7 @@ def run_coupled(sc: Scenario, md: MeshData, out: Path, preset: str | None = None
     full run summary).
     """
     t0 = time.perf_counter()
+    symmetry = resolve_symmetry(sc)
     pb = build_problem(sc, md, preset, mesh_size)
     settlement = SettlementSeries(pb, load_facets(sc, md), out / "settlement.csv")
     piles = PileProbe(sc, pb, out)
@@ -193,6 +220,7 @@ def run_coupled(sc: Scenario, md: MeshData, out: Path, preset: str | None = None
     def summary(complete: bool) -> dict[str, Any]:
         return {"complete": complete, "dofs": pb.num_dofs, "centre_pile": piles.centre,
                 "interface_mode": sc.interface.mode,
+                "symmetry": {"model": symmetry[0], "reason": symmetry[1]},
                 "element": sc.numerics.element, "preset": pb.linear_solver.preset,
                 "settlement_m": [{"t_day": t, "stage": s, "settlement_m": w}
                                  for t, s, w in settlement.history],
@@ -202,7 +230,7 @@ def run_coupled(sc: Scenario, md: MeshData, out: Path, preset: str | None = None
     writer = SummaryWriter(out / "summary_solver.json", pb.comm, summary)
     exports: list[Export] = [settlement, piles]
     if sc.outputs.xdmf:
-        exports.append(XDMFSeries(pb, out / "results.xdmf"))
+        exports.append(XDMFSeries(pb, out / "results.xdmf", xdmf_label(symmetry[0])))
     exports.append(writer)
     bar = tqdm(total=sc.time.end_day, unit="day", desc=sc.name, disable=pb.comm.rank != 0,
                bar_format="{desc}: {n:.3g}/{total:g} day |{bar}| {elapsed}{postfix}")

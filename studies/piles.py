@@ -20,6 +20,11 @@ minus adjacent soil settlement (positive = the pile moves down relative to the s
   times (``interface_layers.csv``). Normal traction: effective, kPa, tension positive;
   viscoplastic slip: magnitude, m.
 
+Every pile of the foundation is reported. In a symmetry-reduced model a pile outside the mesh
+takes the values of its mirror image, and a pile cut by a plane reports its meshed section's
+force divided by the meshed fraction (1/2 or 1/4); means over a cut pile's interface nodes are
+those of the whole ring by symmetry.
+
 Every number is all-reduced over the ranks; rank 0 writes.
 """
 
@@ -37,6 +42,7 @@ from mpi4py import MPI
 
 from pilegroup.fileio import write_text_atomic
 from pilegroup.geometry import groups
+from pilegroup.geometry.adapter import geometry_spec
 from pilegroup.model import Scenario
 from pilegroup.solver import BiotProblem
 from pilegroup.solver.probes import SettlementProbe
@@ -69,6 +75,11 @@ class PileProbe:
         self.comm = pb.comm
         self.xy = np.array(sc.piles.xy, dtype=float)
         self.d = sc.piles.diameter_m
+        # every pile of the foundation from its mirror image in a symmetry-reduced mesh, whose
+        # cut piles carry their meshed fraction of the load
+        spec = geometry_spec(sc)
+        self.source = spec.mirror_of()
+        self.fraction = {i: spec.pile_fraction(i) for i in spec.kept_piles()}
         c = self.xy.mean(axis=0)
         self.centre = int(np.argmin(np.linalg.norm(self.xy - c, axis=1))) + 1
         tops = np.concatenate([[0.0], -np.cumsum([lay.thickness_m or np.inf
@@ -90,7 +101,7 @@ class PileProbe:
                 else np.zeros(0)
             self._pile_cells[i] = (g.cells, np.round(zc, 6))
         self._levels = {}
-        for i in range(1, len(self.xy) + 1):
+        for i in self.fraction:
             zc = self._pile_cells.get(i, (None, np.zeros(0)))[1]
             allz = np.unique(np.concatenate(self.comm.allgather(zc)))
             self._levels[i] = allz[allz < 0.0][::-1]  # below ground, top down
@@ -194,14 +205,17 @@ class PileProbe:
         """Profiles of every pile and pile head loads at output time ``t`` (collective)."""
         averages = self.body.qp.cell_average("stress")
         fields = self._itf.nodal_fields() if self._itf is not None else None
+        forces = {}
+        for k in self.fraction:
+            dN, N = self.axial_force(k, averages)
+            forces[k] = (dN, (N - self._N0.setdefault(k, N.copy())) / self.fraction[k])
         for i in range(1, len(self.xy) + 1):
-            dN, N = self.axial_force(i, averages)
-            N = N - self._N0.setdefault(i, N.copy())
+            dN, N = forces[self.source[i]]
             if N.size:
                 x, y = self.xy[i - 1]
                 self.load_rows.append(f"{t:.6g},{i},{x:.6g},{y:.6g},{N[0]:.9g}")
             if self._itf is not None:
-                dz, fr, rel = self.interface_profile(i, fields)
+                dz, fr, rel = self.interface_profile(self.source[i], fields)
                 Nz = np.interp(dz, dN, N) if N.size else np.zeros_like(dz)
             else:
                 dz, Nz = dN, N
@@ -214,7 +228,7 @@ class PileProbe:
         if self._itf is not None:
             means = self.layer_means()
             for i in range(1, len(self.xy) + 1):
-                self.pile_layer_rows += self._layer_rows(t, i, means[i])
+                self.pile_layer_rows += self._layer_rows(t, i, means[self.source[i]])
         self._write()
 
     def write(self, t: float, stage: str) -> None:
@@ -230,7 +244,8 @@ class PileProbe:
         if self._itf is None or t == self._last_step_t:
             return
         self._last_step_t = t
-        self.layer_rows += self._layer_rows(t, self.centre, self.layer_means()[self.centre])
+        means = self.layer_means()[self.source[self.centre]]
+        self.layer_rows += self._layer_rows(t, self.centre, means)
 
     def _layer_rows(self, t: float, i: int, means: dict) -> list[str]:
         """CSV rows (``LAYER_COLUMNS``) of pile ``i``'s layer ``means`` at time ``t``."""

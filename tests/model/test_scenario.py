@@ -63,6 +63,8 @@ BROKEN = [
      "end of load stage"),
     ("bad-choice", 'element = "Q1Q1"  # measured faster at equal accuracy: docs/benchmarks.md',
      'element = "P3"', 1, "numerics.element", "one of"),
+    ("bad-symmetry", 'element = "Q1Q1"  # measured faster at equal accuracy: docs/benchmarks.md',
+     'element = "Q1Q1"\nsymmetry = "octant"', 1, "numerics.symmetry", "one of 'auto'"),
     ("bad-interface-quadrature", "base = true", 'base = true\nquadrature = "lobatto"', 1,
      "interface.quadrature", "one of 'nodal', 'gauss'"),
     ("output-after-end", "output_days = [0.0, 1.0, 30.0, 89.0, 180.0, 317.0]",
@@ -228,5 +230,6 @@ def test_geometry_adapter_reproduces_bundled_pier():
     g = geometry_spec(load_scenario("pier667"))
     ref = pier667_default()
     assert (g.block, g.piles, g.cap, g.sizing) == (ref.block, ref.piles, ref.cap, ref.sizing)
+    assert g.symmetry == "quarter"  # numerics.symmetry = "auto" (the default)
     assert [lay.thickness for lay in g.layers] == [lay.thickness for lay in ref.layers]
     assert geometry_spec(load_scenario("pier667"), mesh_size=0.3).sizing.h_pile == 0.3

@@ -1,0 +1,107 @@
+"""Mirror symmetry of a pile group about the planes x = 0 and y = 0 (pure data, no gmsh).
+
+A geometry is mirror-symmetric about x = 0 when its block (always centred on the plan origin)
+and its cap are centred on the plane and the pile layout maps onto itself: for every pile there
+is one at (-x, y) with the same diameter, length in soil and embedment, all to :data:`TOL`.
+The scenario's loads are uniform on the cap top (or on the pile heads), the layers horizontal
+and the boundary conditions the same on opposite sides, so loads, soil and supports are
+symmetric whenever the geometry is.
+
+A reduced model keeps ``x >= 0`` (``half_x``, plane x = 0), ``y >= 0`` (``half_y``, plane
+y = 0) or both (``quarter``). Piles keep their full-model numbers: a pile is *kept* when its
+centre lies in the kept part (on a plane counts), a kept pile on a plane is meshed in half, one
+on both planes in quarter, and every pile of the full model has a kept mirror image (itself
+when kept).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Literal
+
+if TYPE_CHECKING:
+    from pilegroup.geometry.spec import CapSpec, PileSpec
+
+__all__ = ["MODES", "PLANES", "TOL", "Symmetry", "asymmetry", "describe_planes", "find_pile",
+           "is_kept", "meshed_fraction", "mode_of", "mirror_map"]
+
+#: What a model keeps of the full geometry; "none" is the full model.
+Symmetry = Literal["none", "quarter", "half_x", "half_y"]
+MODES: tuple[Symmetry, ...] = ("none", "quarter", "half_x", "half_y")
+#: The mirror planes each mode cuts at, by the axis normal to them ("x": the plane x = 0).
+PLANES: dict[str, tuple[str, ...]] = {"none": (), "half_x": ("x",), "half_y": ("y",),
+                                      "quarter": ("x", "y")}
+#: Absolute tolerance (m) of every symmetry comparison.
+TOL = 1e-9
+
+
+def mode_of(planes: Sequence[str]) -> Symmetry:
+    """The reduction that cuts at exactly ``planes`` (a subset of ``("x", "y")``)."""
+    wanted = set(planes)
+    return next(m for m in MODES if set(PLANES[m]) == wanted)
+
+
+def describe_planes(planes: Sequence[str]) -> str:
+    """``("x", "y")`` -> ``"x = 0 and y = 0"``."""
+    return " and ".join(f"{a} = 0" for a in planes)
+
+
+def _coord(p: PileSpec, axis: str) -> float:
+    return p.x if axis == "x" else p.y
+
+
+def find_pile(piles: Sequence[PileSpec], x: float, y: float) -> int | None:
+    """Number (1-based) of the pile centred at (x, y) m to :data:`TOL`, else ``None``."""
+    for i, p in enumerate(piles, start=1):
+        if abs(p.x - x) <= TOL and abs(p.y - y) <= TOL:
+            return i
+    return None
+
+
+def asymmetry(piles: Sequence[PileSpec], cap: CapSpec | None, axis: str) -> str | None:
+    """Why the geometry is not mirror-symmetric about the plane ``axis`` = 0; ``None`` if it is."""
+    if cap is not None:
+        lo, hi = (cap.x_min, cap.x_max) if axis == "x" else (cap.y_min, cap.y_max)
+        if abs(lo + hi) > TOL:
+            return f"the cap spans {axis} = {lo:g} .. {hi:g} m, not centred on {axis} = 0"
+    for i, p in enumerate(piles, start=1):
+        x, y = (-p.x, p.y) if axis == "x" else (p.x, -p.y)
+        j = find_pile(piles, x, y)
+        if j is None:
+            return f"pile {i} at ({p.x:g}, {p.y:g}) m has no mirror image at ({x:g}, {y:g}) m"
+        q = piles[j - 1]
+        for key in ("diameter", "length_in_soil", "embedment"):
+            a, b = getattr(p, key), getattr(q, key)
+            if abs(a - b) > TOL:
+                return (f"pile {i} and its mirror image, pile {j}, differ in {key} "
+                        f"({a:g} vs {b:g} m)")
+    return None
+
+
+def is_kept(p: PileSpec, planes: Sequence[str]) -> bool:
+    """Whether pile ``p``'s centre lies in the part a model cut at ``planes`` keeps."""
+    return all(_coord(p, a) >= -TOL for a in planes)
+
+
+def meshed_fraction(p: PileSpec, planes: Sequence[str]) -> float:
+    """Fraction of pile ``p`` in a model cut at ``planes``: 1, 1/2, 1/4, or 0 if not kept."""
+    if not is_kept(p, planes):
+        return 0.0
+    return 0.5 ** sum(1 for a in planes if abs(_coord(p, a)) <= TOL)
+
+
+def mirror_map(piles: Sequence[PileSpec], planes: Sequence[str]) -> dict[int, int]:
+    """Every pile number -> the number of its mirror image among the kept piles.
+
+    The piles must be symmetric about ``planes`` (:func:`asymmetry`); kept piles map to
+    themselves.
+    """
+    out = {}
+    for i, p in enumerate(piles, start=1):
+        x = abs(p.x) if "x" in planes else p.x
+        y = abs(p.y) if "y" in planes else p.y
+        j = find_pile(piles, x, y)
+        if j is None:
+            raise ValueError(f"pile {i} has no mirror image at ({x:g}, {y:g}) m")
+        out[i] = j
+    return out
