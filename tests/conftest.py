@@ -24,6 +24,12 @@ def small_pile_text() -> str:
     return text
 
 
+@pytest.fixture(scope="session")
+def small_pile_source() -> str:
+    """The TOML text of :func:`small_pile` (for tests that derive their own scenario)."""
+    return small_pile_text()
+
+
 @pytest.fixture
 def small_pile(tmp_path):
     """The bundled single_pile scenario coarsened for the fast tier (same physics): its path."""
