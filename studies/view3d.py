@@ -9,6 +9,9 @@ with ``xml.etree`` and h5py (pyvista's XDMF reader crashes on DOLFINx's XDMF 3 f
 * tied piles: ``results.xdmf`` (whole mesh, ``displacement``) and ``results_pressure.xdmf``
   (the soil sub-mesh; its cells tell the soil from the piles and cap).
 
+A symmetry-reduced model (its grid named ``..._reflect_about_x0_and_y0``) is mirrored about the
+named planes first, so the view shows the whole foundation.
+
 The time drawn is the last output time held by every file needed, so an interrupted run is
 drawn at its last complete output. The picture: the undeformed soil near the pile group with
 the quarter facing the camera cut away (corner on the group's vertical centre line), and the
@@ -124,6 +127,7 @@ def load_view_data(out_dir: Path) -> ViewData:
     """
     out_dir = Path(out_dir)
     main = out_dir / "results.xdmf"
+    normals = _mirror_normals(main)
     geo, top, series = _xdmf(main)
     name, u_soil = _displacement(series, main)
     if name == "displacement":  # tied piles: one field on the whole mesh
@@ -134,22 +138,42 @@ def load_view_data(out_dir: Path) -> ViewData:
         pressure = out_dir / "results_pressure.xdmf"
         if not pressure.is_file():
             log.info("no %s: piles and cap not told from the soil", pressure.name)
-            return ViewData(t, whole, None)
+            return ViewData(t, _mirrored(whole, normals), None)
         pgeo, ptop, _ = _xdmf(pressure)
         soil_centres = _centres(_grid(pressure, pgeo, ptop, None))
         is_soil = _rows_in(_centres(whole), soil_centres)
         if is_soil.sum() != len(soil_centres):
             raise ViewDataError(f"the cells of {pressure.name} are not cells of {main.name}")
-        return ViewData(t, whole.extract_cells(np.flatnonzero(is_soil)),
-                        whole.extract_cells(np.flatnonzero(~is_soil)))
+        return ViewData(t, _mirrored(whole.extract_cells(np.flatnonzero(is_soil)), normals),
+                        _mirrored(whole.extract_cells(np.flatnonzero(~is_soil)), normals))
     structure = out_dir / "results_structure.xdmf"
     sgeo, stop, sseries = _xdmf(structure)
     _, u_struct = _displacement(sseries, structure)
     t = max(set(u_soil) & set(u_struct), default=None)
     if t is None:
         raise ViewDataError(f"{main.name} and {structure.name} share no output time")
-    return ViewData(t, _grid(main, geo, top, u_soil[t]),
-                    _grid(structure, sgeo, stop, u_struct[t]))
+    return ViewData(t, _mirrored(_grid(main, geo, top, u_soil[t]), normals),
+                    _mirrored(_grid(structure, sgeo, stop, u_struct[t]), normals))
+
+
+def _mirror_normals(xdmf: Path) -> list[tuple[float, float, float]]:
+    """Normals of the mirror planes named by a reduced model's grid (none for the full model).
+
+    ``..._reflect_about_x0_and_y0`` names the planes x = 0 and y = 0.
+    """
+    grid = ET.parse(xdmf).getroot().find(".//Grid[@Name]")
+    name = grid.get("Name", "") if grid is not None else ""
+    _, _, planes = name.partition("_reflect_about_")
+    return [n for tag, n in (("x0", (1.0, 0.0, 0.0)), ("y0", (0.0, 1.0, 0.0)))
+            if tag in planes.split("_and_")]
+
+
+def _mirrored(grid: pv.UnstructuredGrid, normals: list[tuple[float, float, float]]
+              ) -> pv.UnstructuredGrid:
+    """``grid`` and its mirror images about the planes through the origin with ``normals``."""
+    for n in normals:
+        grid = grid.merge(grid.reflect(n, point=(0.0, 0.0, 0.0)))
+    return grid
 
 
 def render_view3d(data: ViewData, path: Path, title: str) -> Path:
