@@ -187,8 +187,9 @@ class LinearSolver:
     so Newton stays exact); a solve that needs more than ``reuse_factor_its`` iterations, or
     fails, triggers a new factorisation (and a re-solve when it failed). A factorisation made
     under another set of constraints (undrained steps release the drainage conditions) is not
-    tried at all: it is refactored at once. A preset with a ``fallback`` that fails is replaced
-    by the fallback for the rest of the run (one warning line; :attr:`fallbacks` records it).
+    tried at all: it is refactored at once. When a step cannot be completed with a preset that
+    has a ``fallback`` (the stepper has cut it back to its minimum), :meth:`fall_back` replaces
+    the preset for the rest of the run (one warning line; :attr:`fallbacks` records it).
 
     Args:
         comm: communicator of the problem.
@@ -249,19 +250,20 @@ class LinearSolver:
 
     def solve(self, rhs: PETSc.Vec, sol: PETSc.Vec, undrained: bool) -> int:
         """Solve ``A sol = rhs``; returns the Krylov iterations (raises when it fails)."""
-        try:
-            return self._solve(rhs, sol, undrained)
-        except ConvergenceError as exc:
-            fallback = self.spec.fallback
-            if fallback is None:
-                raise
-            note = f"linear solver preset {self.preset!r} failed ({exc}); continuing with " \
-                f"{fallback!r}"
-            self.fallbacks.append(note)
-            if self.comm.rank == 0:
-                log.warning(note)
-            self._use(fallback, None)
-            return self.solve(rhs, sol, undrained)
+        return self._solve(rhs, sol, undrained)
+
+    def fall_back(self, reason: str) -> bool:
+        """Hand over to the preset's fallback (one warning line); ``False`` if it has none."""
+        fallback = self.spec.fallback
+        if fallback is None:
+            return False
+        note = f"linear solver preset {self.preset!r} failed ({reason}); continuing with " \
+            f"{fallback!r}"
+        self.fallbacks.append(note)
+        if self.comm.rank == 0:
+            log.warning(note)
+        self._use(fallback, None)
+        return True
 
     def _solve(self, rhs: PETSc.Vec, sol: PETSc.Vec, undrained: bool) -> int:
         limit = self.spec.reuse_factor_its

@@ -378,6 +378,12 @@ class BiotProblem:
         self.interface.add_jacobian(self.A, self._itf_is[i_s], self._itf_is[i_t],
                                     constrained(i_s), constrained(i_t))
 
+    def fall_back_linear_solver(self, reason: str) -> bool:
+        """After a step failed in the linear solver: use the preset's fallback, if it has one."""
+        if "KSP diverged" not in reason:
+            return False
+        return self.linear_solver.fall_back(reason)
+
     def solve_linear(self, rhs: PETSc.Vec, sol: PETSc.Vec) -> int:
         """Solve with the current Jacobian; returns the Krylov iterations."""
         t0 = time.perf_counter()

@@ -112,10 +112,14 @@ class AdaptiveStepper:
                     self.log.rejected += 1
                     self.dt = dt * ts.cut
                     self._easy = 0
+                    if self.dt < ts.dt_min and problem.fall_back_linear_solver(info.message):
+                        self.dt = dt  # the same step again with the fallback linear solver
+                        continue
                     if self.dt < ts.dt_min:
                         raise StepFailure(
                             f"stage {stage!r}: step at t = {t:.6g} day failed with dt = "
-                            f"{dt:.3g} day (< dt_min after cut): {info.message}")
+                            f"{dt:.3g} day (< dt_min after cut): {info.message}",
+                            t, load_factor(t), stage)
                     continue
                 problem.commit()
                 self.log.steps.append(StepRecord(stage, t_new, dt, load_factor(t_new),
@@ -213,9 +217,13 @@ def _run(problem: BiotProblem, stages: Sequence[Stage], ts: TimeStepping,
         lam0, lam1, t0, t1 = lam, st.load_factor if st.kind == "load" else lam, t, t + st.duration
         if st.kind == "load" and st.duration == 0.0:
             info = problem.solve_step(0.0, lam1)
+            if not info.converged and problem.fall_back_linear_solver(info.message):
+                problem.rollback()
+                info = problem.solve_step(0.0, lam1)
             if not info.converged:
                 problem.rollback()
-                raise StepFailure(f"instantaneous load stage {st.name!r} failed: {info.message}")
+                raise StepFailure(f"instantaneous load stage {st.name!r} failed: {info.message}",
+                                  t, lam, st.name)
             problem.commit()
             log.steps.append(StepRecord(st.name, t, 0.0, lam1, info.newton_its, info.ksp_its,
                                         info.seconds))

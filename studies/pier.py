@@ -21,6 +21,7 @@ from tqdm import tqdm
 
 from pilegroup.constitutive.interface import PileSoilInterface
 from pilegroup.constitutive.soil import DruckerPrager, LinearElastic, MohrCoulomb
+from pilegroup.errors import StepFailure
 from pilegroup.geometry import groups
 from pilegroup.geometry.adapter import geometry_spec, resolve_symmetry
 from pilegroup.geometry.meshdata import MeshData
@@ -46,7 +47,7 @@ from pilegroup.solver import (
     run_summary,
 )
 from pilegroup.solver.probes import facet_area
-from pilegroup.studies.piles import PileProbe, SettlementSeries
+from pilegroup.studies.piles import LoadSettlementCurve, PileProbe, SettlementSeries
 
 log = logging.getLogger(__name__)
 
@@ -228,7 +229,9 @@ def run_coupled(sc: Scenario, md: MeshData, out: Path, preset: str | None = None
                 "wall_s": time.perf_counter() - t0}
 
     writer = SummaryWriter(out / "summary_solver.json", pb.comm, summary)
-    exports: list[Export] = [settlement, piles]
+    curve = LoadSettlementCurve(pb, settlement.probe, sc.total_cap_load(),
+                                out / "load_settlement.csv")
+    exports: list[Export] = [settlement, piles, curve]
     if sc.outputs.xdmf:
         exports.append(XDMFSeries(pb, out / "results.xdmf", xdmf_label(symmetry[0])))
     exports.append(writer)
@@ -237,12 +240,18 @@ def run_coupled(sc: Scenario, md: MeshData, out: Path, preset: str | None = None
 
     def on_step(problem: BiotProblem, t: float, stage: str) -> None:
         piles.record_step(t)
+        curve.record(t, stage)
         bar.n = t
         bar.set_postfix_str(f"{stage}, settlement {1000 * settlement.probe():.2f} mm")
 
     try:
         run_log = run_stages(pb, solver_stages(sc), time_stepping(sc), on_step=on_step,
                              geostatic_tol=GEOSTATIC_TOL_M, exports=exports)
+    except StepFailure as exc:
+        load = exc.load_factor * sc.total_cap_load()
+        raise StepFailure(f"no equilibrium beyond load factor {exc.load_factor:.4g} "
+                          f"({load:.6g} kN) at t = {exc.t:.6g} day, stage {exc.stage!r}: {exc}",
+                          exc.t, exc.load_factor, exc.stage) from exc
     finally:
         bar.close()
     data = run_summary(pb, run_log, summary(True))

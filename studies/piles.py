@@ -49,6 +49,7 @@ from pilegroup.solver.probes import SettlementProbe
 from pilegroup.studies.tables import (
     LAYER_COLUMNS,
     LOAD_COLUMNS,
+    LOAD_SETTLEMENT_COLUMNS,
     PROFILE_COLUMNS,
     SETTLEMENT_COLUMNS,
 )
@@ -290,3 +291,37 @@ class SettlementSeries:
 
     def close(self) -> None:
         """Nothing stays open."""
+
+
+class LoadSettlementCurve:
+    """``load_settlement.csv``: load on the foundation against settlement, every accepted step.
+
+    :meth:`record` after every accepted step and :meth:`write` (export protocol) at the output
+    times add a point (once per time); rank 0 rewrites the file each time, so a run that stops
+    (no equilibrium beyond some load) leaves the curve it reached.
+    """
+
+    def __init__(self, problem: BiotProblem, probe: SettlementProbe, total_load_kN: float,
+                 path: Path) -> None:
+        self.problem, self.probe, self.total = problem, probe, total_load_kN
+        self.path = Path(path)
+        self.rows: list[str] = []
+        self._last_t: float | None = None
+
+    def record(self, t: float, stage: str) -> None:
+        """Add the current point (collective: the settlement is all-reduced)."""
+        if t == self._last_t:
+            return
+        self._last_t = t
+        lam = self.problem.load_factor
+        self.rows.append(f"{t:.6g},{stage},{lam:.9g},{lam * self.total:.9g},{self.probe():.9g}")
+        if self.problem.comm.rank == 0:
+            write_text_atomic(self.path, "\n".join([LOAD_SETTLEMENT_COLUMNS, *self.rows]) + "\n")
+
+    def write(self, t: float, stage: str) -> None:
+        """Export protocol: the point at an output time."""
+        self.record(t, stage)
+
+    def close(self) -> None:
+        """Nothing stays open."""
+

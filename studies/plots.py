@@ -147,6 +147,23 @@ def plot_pile_loads(run: RunData) -> Figure:
     return fig
 
 
+def plot_load_settlement(run: RunData) -> Figure:
+    """Load on the foundation (kN) against its settlement (mm), every accepted step."""
+    assert run.load_settlement is not None
+    c = run.load_settlement
+    order = np.argsort(c["t_day"], kind="stable")
+    fig = Figure(figsize=(7.0, 4.5))
+    ax = fig.subplots()
+    ax.plot(1000 * c["settlement_m"][order], c["load_kN"][order], marker=".", lw=1.0)
+    ax.set_xlabel("settlement (mm, down)")
+    ax.set_ylabel("load on the foundation (kN)")
+    status = run.summary.get("status")
+    note = " (stopped: no equilibrium beyond the last point)" if status == "failed" else ""
+    ax.set_title(f"Load–settlement curve{note}")
+    ax.grid(alpha=0.3)
+    return fig
+
+
 #: Every figure: file name, caption, the RunData table it needs, plotting function.
 FIGURES: tuple[tuple[str, str, str, Callable[[RunData], Figure]], ...] = (
     ("settlement_time.png", "Cap settlement against time", "settlement", plot_settlement),
@@ -163,6 +180,8 @@ FIGURES: tuple[tuple[str, str, str, Callable[[RunData], Figure]], ...] = (
     ("axial_force_profiles.png", "Axial force profiles of the centre pile", "profiles",
      plot_axial_force_profiles),
     ("pile_loads.png", "Pile head forces at the last output time", "loads", plot_pile_loads),
+    ("load_settlement.png", "Load–settlement curve (every accepted step)", "load_settlement",
+     plot_load_settlement),
 )
 
 

@@ -45,6 +45,8 @@ def run_scenario(sc: Scenario, out: Path, mesh_size: float | None = None,
         summary = _run(sc, spec, out, stop_after, comm, t0)
     except Exception as exc:
         _write_failure(out, sc, comm, exc, t0)
+        if isinstance(exc, PilegroupError) and comm.rank == 0 and sc.outputs.plots:
+            _plots_of_what_was_reached(out)
         raise
     if comm.rank == 0 and summary["solver"] is not None and sc.outputs.plots:
         for path in write_report(out):
@@ -73,6 +75,15 @@ def _run(sc: Scenario, spec: GeometrySpec, out: Path, stop_after: str, comm: MPI
         write_json_atomic(out / "summary.json", summary)
         log.info("wrote %s", out / "summary.json")
     return summary
+
+
+def _plots_of_what_was_reached(out: Path) -> None:
+    """The report's figures of a run that stopped (e.g. its load–settlement curve)."""
+    try:
+        for path in write_report(out):
+            log.info("wrote %s", path)
+    except (PilegroupError, OSError, ValueError, KeyError) as exc:  # the failure stays the news
+        log.warning("no plots of the stopped run: %s", exc)
 
 
 def _write_failure(out: Path, sc: Scenario, comm: MPI.Comm, exc: BaseException,

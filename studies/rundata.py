@@ -22,6 +22,7 @@ import numpy as np
 from pilegroup.model import ScenarioError
 from pilegroup.studies.tables import (
     LAYER_HISTORY_CSV,
+    LOAD_SETTLEMENT_CSV,
     LOADS_CSV,
     PROFILES_CSV,
     SETTLEMENT_CSV,
@@ -32,7 +33,7 @@ from pilegroup.studies.tables import (
 log = logging.getLogger(__name__)
 
 #: The CSV files a run folder is read from, in this order.
-RUN_FILES = (SETTLEMENT_CSV, PROFILES_CSV, LAYER_HISTORY_CSV, LOADS_CSV)
+RUN_FILES = (SETTLEMENT_CSV, PROFILES_CSV, LAYER_HISTORY_CSV, LOADS_CSV, LOAD_SETTLEMENT_CSV)
 
 #: Default centre pile of a 3 x 3 group numbered row by row.
 DEFAULT_CENTRE_PILE = 5
@@ -63,6 +64,7 @@ class RunData:
     profiles: Table | None
     history: Table | None
     loads: Table | None
+    load_settlement: Table | None
     summary: dict[str, Any]
     centre_pile: int
     t_load: float | None
@@ -153,8 +155,9 @@ def load_run(out_dir: Path) -> RunData:
     if history is not None:
         names.update({int(j): str(n) for j, n in zip(history["layer"], history["layer_name"],
                                                       strict=True)})
-    return RunData(out_dir, raw[SETTLEMENT_CSV], profiles, history, raw[LOADS_CSV], summary,
-                   centre, _end_of_loading(raw[SETTLEMENT_CSV], scenario), names)
+    return RunData(out_dir, raw[SETTLEMENT_CSV], profiles, history, raw[LOADS_CSV],
+                   raw[LOAD_SETTLEMENT_CSV], summary, centre,
+                   _end_of_loading(raw[SETTLEMENT_CSV], scenario), names)
 
 
 def layer_series(run: RunData, column: str) -> dict[int, tuple[np.ndarray, np.ndarray]]:

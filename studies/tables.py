@@ -14,7 +14,9 @@ positive down; forces kN; stresses kPa; displacements m.
   means on the shaft of the centre pile, every accepted step);
 * ``interface_layers.csv``: the columns of ``layer_history.csv``, every pile at the output
   times;
-* ``pile_loads.csv``: ``t_day,pile,x_m,y_m,head_force_kN``.
+* ``pile_loads.csv``: ``t_day,pile,x_m,y_m,head_force_kN``;
+* ``load_settlement.csv``: ``t_day,stage,load_factor,load_kN,settlement_m`` (every accepted
+  step: the load–settlement curve, also of a run that found no equilibrium beyond some load).
 """
 
 from __future__ import annotations
@@ -31,6 +33,7 @@ PROFILES_CSV = "pile_profiles.csv"
 LAYER_HISTORY_CSV = "layer_history.csv"
 INTERFACE_LAYERS_CSV = "interface_layers.csv"
 LOADS_CSV = "pile_loads.csv"
+LOAD_SETTLEMENT_CSV = "load_settlement.csv"
 
 _LAYER_MEANS = ("t_day", "pile", "layer", "layer_name", "depth_top_m", "depth_bottom_m",
                 "shaft_friction_kPa", "relative_displacement_m", "viscoplastic_slip_m",
@@ -44,6 +47,7 @@ COLUMNS: dict[str, tuple[str, ...]] = {
     LAYER_HISTORY_CSV: _LAYER_MEANS,
     INTERFACE_LAYERS_CSV: _LAYER_MEANS,
     LOADS_CSV: ("t_day", "pile", "x_m", "y_m", "head_force_kN"),
+    LOAD_SETTLEMENT_CSV: ("t_day", "stage", "load_factor", "load_kN", "settlement_m"),
 }
 #: The columns that hold text; all others hold numbers.
 TEXT_COLUMNS = frozenset({"stage", "layer_name"})
@@ -53,6 +57,7 @@ SETTLEMENT_COLUMNS = ",".join(COLUMNS[SETTLEMENT_CSV])
 PROFILE_COLUMNS = ",".join(COLUMNS[PROFILES_CSV])
 LAYER_COLUMNS = ",".join(_LAYER_MEANS)
 LOAD_COLUMNS = ",".join(COLUMNS[LOADS_CSV])
+LOAD_SETTLEMENT_COLUMNS = ",".join(COLUMNS[LOAD_SETTLEMENT_CSV])
 
 #: A CSV file read by :func:`read_csv`: column name -> values (float, or str for text columns).
 Table = dict[str, np.ndarray]

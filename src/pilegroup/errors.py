@@ -76,7 +76,15 @@ class ConvergenceError(SolverError):
 
 
 class StepFailure(SolverError):
-    """The adaptive stepper could not complete a step even at the minimum step size."""
+    """The adaptive stepper could not complete a step even at the minimum step size.
+
+    ``t`` (day), ``load_factor`` and ``stage`` are those of the last equilibrium reached.
+    """
+
+    def __init__(self, message: str, t: float = 0.0, load_factor: float = 0.0,
+                 stage: str = "") -> None:
+        super().__init__(message)
+        self.t, self.load_factor, self.stage = t, load_factor, stage
 
 
 __all__ = [
