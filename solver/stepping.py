@@ -67,6 +67,9 @@ Callback = Callable[["BiotProblem", float, str], None]
 class AdaptiveStepper:
     """Adaptive stepper over a problem with ``solve_step/commit/rollback``.
 
+    Before giving up below ``dt_min`` it asks ``problem.fall_back_linear_solver(message)``
+    whether a fallback linear solver can retry the step.
+
     Args:
         ts: step-size rules.
         log: run log to append to.

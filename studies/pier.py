@@ -114,15 +114,14 @@ def full_load_area(sc: Scenario, md: MeshData, mesh_size: float | None = None) -
     """Area (m^2) of the loaded top of the whole foundation (cap top, or every pile head).
 
     With a cap, its plan area. Without one, the meshed pile heads (polygons slightly smaller
-    than circles, so that the resultant is exactly the scenario's load), each divided by the
-    fraction of its pile in a symmetry-reduced mesh. A uniform pressure of total load / this
+    than circles, so that the resultant is exactly the scenario's load); a symmetry-reduced mesh
+    holds 1/2 (one mirror plane) or 1/4 (two) of them. A uniform pressure of total load / this
     area then carries the reduced model's share of the load.
     """
     if sc.cap is not None:
         return sc.cap.size_x_m * sc.cap.size_y_m
-    spec = geometry_spec(sc, mesh_size)
-    return sum(facet_area(md, [n]) / spec.pile_fraction(groups.head_of(n))
-               for n in load_facets(sc, md))
+    held = 0.5 ** len(geometry_spec(sc, mesh_size).cut_planes())
+    return facet_area(md, load_facets(sc, md)) / held
 
 
 def interface_law(sc: Scenario, j: int, mesh_size: float) -> PileSoilInterface | None:

@@ -172,7 +172,15 @@ def _mirrored(grid: pv.UnstructuredGrid, normals: list[tuple[float, float, float
               ) -> pv.UnstructuredGrid:
     """``grid`` and its mirror images about the planes through the origin with ``normals``."""
     for n in normals:
-        grid = grid.merge(grid.reflect(n, point=(0.0, 0.0, 0.0)))
+        axis = int(np.argmax(n))
+        points = np.array(grid.points, copy=True)
+        points[:, axis] *= -1.0
+        # a mirror image turns the hexahedra inside out: swap their bottom and top faces
+        hexes = grid.cell_connectivity.reshape(-1, 8)[:, [4, 5, 6, 7, 0, 1, 2, 3]]
+        image = hex_grid(points, hexes)
+        for key in grid.point_data:
+            image.point_data[key] = np.asarray(grid.point_data[key])
+        grid = grid.merge(image)
     return grid
 
 

@@ -143,6 +143,9 @@ class FakeProblem:
         self.trial = None
         self.rollbacks += 1
 
+    def fall_back_linear_solver(self, reason):
+        return False  # no linear solver to hand over
+
 
 def test_stepper_cuts_back_grows_and_hits_milestones():
     pb = FakeProblem(dt_fail=0.3)

@@ -1,9 +1,13 @@
 """A load far beyond capacity stops cleanly: no equilibrium beyond the load reached, the
-load-settlement curve written and plotted, a failed summary, exit code 1, on 1 and 2 ranks."""
+load-settlement curve written and plotted, a failed summary, exit code 1, on 1 and 2 ranks.
+
+Slow tier: the run goes on until the settlement runs away (about 3 min on 2 cores).
+"""
 
 import csv
 import json
 import os
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -13,6 +17,7 @@ import pytest
 BIN = Path(sys.executable).parent
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("ranks", [1, pytest.param(2, marks=pytest.mark.mpi)])
 def test_load_beyond_capacity_stops_cleanly(tmp_path, small_pile_source, ranks):
     text = small_pile_source.replace("cap_load_kN = 500.0", "cap_load_kN = 200000.0")
@@ -34,6 +39,7 @@ def test_load_beyond_capacity_stops_cleanly(tmp_path, small_pile_source, ranks):
     with (out / "load_settlement.csv").open() as fh:
         rows = list(csv.DictReader(fh))
     loads = [float(row["load_kN"]) for row in rows]
-    assert len(rows) >= 2 and loads[0] == 0.0 and 0.0 < loads[-1] < 200000.0
-    assert loads == sorted(loads)  # the curve of the load ramp reached
+    assert len(rows) >= 2 and loads[0] == 0.0 and loads == sorted(loads)
+    reached = float(re.search(r"\(([0-9.e+]+) kN\)", s["reason"]).group(1))
+    assert loads[-1] == pytest.approx(reached, rel=1e-5)  # the curve ends where it stopped
     assert (out / "plots" / "load_settlement.png").stat().st_size > 0

@@ -74,6 +74,10 @@ def make_run(out: Path, slopes: dict[int, float] | None = None, shape: str = "ea
         rows = [[t, 3 * r + c + 1, 3.0 * c, 3.0 * r, 1000.0 + 100.0 * (3 * r + c + 1)]
                 for t in OUTPUT_DAYS for r in range(3) for c in range(3)]
         write_csv(out / "pile_loads.csv", list(COLUMNS["pile_loads.csv"]), rows)
+    if "load_settlement.csv" in files:
+        rows = [[t, stage.get(t, "consolidation"), min(t, 1.0), 10856.0 * min(t, 1.0),
+                 f"{settlement(t):.9g}"] for t in OUTPUT_DAYS]
+        write_csv(out / "load_settlement.csv", list(COLUMNS["load_settlement.csv"]), rows)
     (out / "summary.json").write_text(json.dumps({"scenario": "synthetic", "complete": complete,
                                                   "centre_pile": CENTRE}))
     return out

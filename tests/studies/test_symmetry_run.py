@@ -1,10 +1,13 @@
 """A symmetric 3 x 3 group without a cap: the quarter model gives the full model's answers.
 
 The centre pile is cut into a quarter, the four edge piles into halves; every pile of the
-foundation is reported. Tolerances (the meshes differ in the far field, so the answers agree to
-discretisation accuracy, not to round-off): settlement at every output time within 0.2 %, every
-pile's head force within 0.5 %, the centre pile's friction and axial-force profiles within 1 %
-of the profile's maximum. The quarter runs serially and under ``mpirun -n 2``.
+foundation is reported. The two meshes differ in the unstructured far field, so the answers
+agree to discretisation accuracy, not to round-off. Tolerances: every pile's head force within
+0.5 %, the centre pile's friction and axial-force profiles within 1 % of the profile's maximum
+(as for Pier 667); the settlement within 0.5 %: on this coarse test mesh (h = 1 m, 8 edges
+around a pile, far field 2 m) quarter and full differ by 0.25 % (measured), on the bundled
+single-pile sizing (h = 0.5 m) by 0.08 %, while the coarse mesh's own discretisation error is
+about 5 % (far field 8 m vs 2 m). The quarter runs serially and under ``mpirun -n 2``.
 """
 
 import csv
@@ -22,8 +25,9 @@ BIN = Path(sys.executable).parent
 
 def group_text(single_pile: str) -> str:
     """The fast-tier single pile made a 3 x 3 group at 2.4 m spacing (no cap)."""
-    assert "grid = [1, 1]\n" in single_pile
-    return single_pile.replace("grid = [1, 1]\n", "grid = [3, 3]\nspacing_m = [2.4, 2.4]\n")
+    assert "grid = [1, 1]\n" in single_pile and "far_field_size_m = 8.0" in single_pile
+    return single_pile.replace("grid = [1, 1]\n", "grid = [3, 3]\nspacing_m = [2.4, 2.4]\n") \
+        .replace("far_field_size_m = 8.0", "far_field_size_m = 2.0")
 
 
 def _run(tmp: Path, text: str, name: str, symmetry: str, ranks: int = 1) -> Path:
@@ -51,7 +55,7 @@ def _compare(full: Path, reduced: Path) -> None:
     w_full = [float(r["settlement_m"]) for r in _rows(full / "settlement.csv")]
     w_red = [float(r["settlement_m"]) for r in _rows(reduced / "settlement.csv")]
     assert len(w_full) == len(w_red) == 3
-    np.testing.assert_allclose(w_red[1:], w_full[1:], rtol=2e-3)
+    np.testing.assert_allclose(w_red[1:], w_full[1:], rtol=5e-3)
     loads = {(r["t_day"], r["pile"]): float(r["head_force_kN"])
              for r in _rows(full / "pile_loads.csv")}
     red = {(r["t_day"], r["pile"]): float(r["head_force_kN"])
