@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import gmsh
 import numpy as np
 
+from pilegroup.errors import ScenarioError
 from pilegroup.geometry.spec import GeometrySpec, PileSpec
 
 __all__ = [
@@ -319,10 +320,14 @@ def set_far_field_size(spec: GeometrySpec, outline: list[int]) -> None:
     fld.setAsBackgroundMesh(f_math)
 
 
-def mesh_plan(far: int) -> tuple[int, float]:
+def mesh_plan(far: int, growth: float) -> tuple[int, float]:
     """Mesh all surfaces with the far-field algorithm giving the best all-quad plan.
 
-    ``far`` is the far-field surface. Returns (algorithm, far-field minimum scaled Jacobian).
+    ``far`` is the far-field surface, ``growth`` the sizing's (named in the error). Returns
+    (algorithm, far-field minimum scaled Jacobian). Raises
+    :class:`~pilegroup.errors.ScenarioError` naming ``numerics.mesh.growth`` when no algorithm
+    recombines the far field into quads: the sizing is one this mesher cannot build (exit 2),
+    which the user fixes by changing it.
     """
     best: tuple[float, int] | None = None
     for alg in FAR_FIELD_ALGORITHMS:
@@ -341,8 +346,10 @@ def mesh_plan(far: int) -> tuple[int, float]:
         if q >= 0.35:
             break
     if best is None:
-        raise RuntimeError("far-field recombination left triangles with every algorithm "
-                           f"{FAR_FIELD_ALGORITHMS}; change sizing.growth or h_far")
+        raise ScenarioError("numerics.mesh.growth", growth,
+                            "the far field cannot be meshed with quads at this sizing (every "
+                            f"gmsh algorithm {FAR_FIELD_ALGORITHMS} left triangles): change "
+                            "numerics.mesh.growth, far_field_size_m or size_m", "-")
     if best[1] != alg:
         gmsh.model.mesh.clear()
         gmsh.model.mesh.setAlgorithm(2, far, best[1])
