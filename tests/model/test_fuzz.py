@@ -39,8 +39,10 @@ def _leaves(node, path=()):
     """Every (path, value) of the document; tables and lists are leaves too."""
     if path:
         yield path, node
-    items = node.items() if isinstance(node, dict) else enumerate(node) \
-        if isinstance(node, list) else ()
+    if isinstance(node, dict):
+        items = list(node.items())
+    else:
+        items = list(enumerate(node)) if isinstance(node, list) else []
     for k, v in items:
         yield from _leaves(v, (*path, k))
 
@@ -158,9 +160,13 @@ def _mesh_mutations(path, rng, count):
     return found
 
 
+#: A sizing that validates but that gmsh cannot recombine into an all-quad far field.
+UNMESHABLE = {"numerics.mesh.growth": 2.0, "site.depth_m": 60.0, "numerics.mesh.n_circ_min": 12}
+
+
 def test_validated_mutations_mesh_or_exit_2(small_pile, tmp_path, monkeypatch, capsys):
     monkeypatch.setenv("PILEGROUP_MESH_CACHE", str(tmp_path / "cache"))
-    for n, over in enumerate(_mesh_mutations(small_pile, random.Random(11), 3)):
+    for n, over in enumerate(_mesh_mutations(small_pile, random.Random(11), 4)):
         out = tmp_path / f"out{n}"
         sets = [a for k, v in over.items() for a in ("--set", f"{k}={v!r}")]
         rc = main(["run", small_pile, *sets, "--stop-after", "mesh", "--out", str(out)])
@@ -168,6 +174,15 @@ def test_validated_mutations_mesh_or_exit_2(small_pile, tmp_path, monkeypatch, c
         if rc == 0:  # the estimate bounds the real count from above
             cells = json.loads((out / "summary.json").read_text())["mesh"]["cells"]
             assert cells <= estimated_cells(load_scenario(small_pile, over)), (cells, over)
+
+
+def test_unmeshable_sizing_exits_2_naming_growth(small_pile, tmp_path, monkeypatch, capsys):
+    monkeypatch.setenv("PILEGROUP_MESH_CACHE", str(tmp_path / "cache"))
+    sets = [a for k, v in UNMESHABLE.items() for a in ("--set", f"{k}={v!r}")]
+    rc = main(["run", small_pile, *sets, "--stop-after", "mesh", "--out", str(tmp_path / "o")])
+    err = capsys.readouterr().err
+    _one_clean_line(rc, err)
+    assert rc == EXIT_INPUT and "numerics.mesh.growth = 2.0" in err
 
 
 REPRODUCTIONS = ["piles.diameter_m=1e-300", "site.depth_m=1e300", "layers[0].k_m_per_day=1e300",
