@@ -169,8 +169,8 @@ def _breaks(vals: list[float], lo: float, hi: float) -> list[float]:
 def cell_grid(spec: GeometrySpec) -> tuple[list[float], list[float], CellPiles]:
     """Cell edges in x and y of the structured region and the pile of each pile cell.
 
-    Raises ``ValueError`` if two piles share a cell or a pile leaves less than 0.2 x its radius
-    to its cell edge.
+    Raises :class:`~pilegroup.errors.ScenarioError` (exit code 2) if two piles share a cell or
+    a pile leaves less than 0.2 x its radius to its cell edge.
     """
     x0, x1, y0, y1 = spec.structured_region()
     xb = _breaks([p.x for p in spec.piles], x0, x1)
@@ -180,14 +180,16 @@ def cell_grid(spec: GeometrySpec) -> tuple[list[float], list[float], CellPiles]:
         ix = int(np.searchsorted(xb, p.x)) - 1
         iy = int(np.searchsorted(yb, p.y)) - 1
         if (ix, iy) in cell_pile:
-            raise ValueError(f"piles {cell_pile[(ix, iy)] + 1} and {i + 1} fall into the same "
-                             "structured cell: pile positions must form a rectilinear grid")
+            raise ScenarioError(f"piles[{i + 1}] position", [p.x, p.y],
+                                f"falls into the structured cell of pile {cell_pile[(ix, iy)] + 1}"
+                                ": pile positions must form a rectilinear grid", "m")
         cx0, cx1, cy0, cy1 = xb[ix], xb[ix + 1], yb[iy], yb[iy + 1]
         clear = min(p.x - cx0, cx1 - p.x, p.y - cy0, cy1 - p.y) - p.radius
         if clear < 0.2 * p.radius:
-            raise ValueError(f"pile {i + 1} at ({p.x:g}, {p.y:g}) m leaves only {clear:.3g} m "
-                             "to its structured cell edge: piles too close to each other or to "
-                             "the cap edge (need >= 0.2 x radius)")
+            raise ScenarioError(f"piles[{i + 1}] position", [p.x, p.y],
+                                f"leaves only {clear:.3g} m to its structured cell edge: piles"
+                                " too close to each other or to the cap edge (need >= 0.2 x"
+                                " radius)", "m")
         cell_pile[(ix, iy)] = i
     return xb, yb, cell_pile
 

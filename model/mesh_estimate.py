@@ -11,8 +11,9 @@ The mesh is plan quads extruded down through the layers (docs/geometry.md), so t
 * vertical: the same graded integral of ``1 / dz`` from the ground surface and the pile toes,
   plus ``min_layer_divisions + 1`` per slab (rounding up per layer, toe cut and cap).
 
-The product times :data:`SAFETY` bounds the real counts of the bundled scenarios and of the
-benchmark meshes from above by 1.3-3x (``tests/model/test_fuzz.py`` checks it on a mesh);
+The product times :data:`SAFETY` is above the real cell count of the whole model by 1.3-3x
+for the bundled scenarios and the benchmark meshes (h = 0.1-1 m; ``tests/model/test_fuzz.py``
+checks the bound on meshes); a symmetry-reduced model has a half or a quarter of those cells.
 :data:`MAX_CELLS` is the largest estimate a scenario may have.
 """
 

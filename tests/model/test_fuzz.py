@@ -160,10 +160,6 @@ def _mesh_mutations(path, rng, count):
     return found
 
 
-#: A sizing that validates but that gmsh cannot recombine into an all-quad far field.
-UNMESHABLE = {"numerics.mesh.growth": 2.0, "site.depth_m": 60.0, "numerics.mesh.n_circ_min": 12}
-
-
 def test_validated_mutations_mesh_or_exit_2(small_pile, tmp_path, monkeypatch, capsys):
     monkeypatch.setenv("PILEGROUP_MESH_CACHE", str(tmp_path / "cache"))
     for n, over in enumerate(_mesh_mutations(small_pile, random.Random(11), 4)):
@@ -176,13 +172,24 @@ def test_validated_mutations_mesh_or_exit_2(small_pile, tmp_path, monkeypatch, c
             assert cells <= estimated_cells(load_scenario(small_pile, over)), (cells, over)
 
 
-def test_unmeshable_sizing_exits_2_naming_growth(small_pile, tmp_path, monkeypatch, capsys):
+#: Scenarios that validate but that the mesher cannot build: (scenario, overrides, key named).
+UNMESHABLE = [
+    (None, {"numerics.mesh.growth": 2.0, "site.depth_m": 60.0, "numerics.mesh.n_circ_min": 12},
+     "numerics.mesh.growth = 2.0"),  # gmsh leaves triangles in the far field
+    ("pier667", {"cap.size_x_m": 8.1}, "piles[1] position"),  # 0.05 m from pile to cap edge
+]
+
+
+@pytest.mark.parametrize("case", UNMESHABLE, ids=["far-field", "cap-edge"])
+def test_unmeshable_scenarios_exit_2(case, small_pile, tmp_path, monkeypatch, capsys):
+    name, over, named = case
     monkeypatch.setenv("PILEGROUP_MESH_CACHE", str(tmp_path / "cache"))
-    sets = [a for k, v in UNMESHABLE.items() for a in ("--set", f"{k}={v!r}")]
-    rc = main(["run", small_pile, *sets, "--stop-after", "mesh", "--out", str(tmp_path / "o")])
+    sets = [a for k, v in over.items() for a in ("--set", f"{k}={v!r}")]
+    rc = main(["run", name or small_pile, *sets, "--stop-after", "mesh",
+               "--out", str(tmp_path / "o")])
     err = capsys.readouterr().err
     _one_clean_line(rc, err)
-    assert rc == EXIT_INPUT and "numerics.mesh.growth = 2.0" in err
+    assert rc == EXIT_INPUT and named in err
 
 
 REPRODUCTIONS = ["piles.diameter_m=1e-300", "site.depth_m=1e300", "layers[0].k_m_per_day=1e300",
