@@ -82,18 +82,29 @@ class Scenario:
                                 " layer's thickness)", "m")
 
     def _check_plan(self) -> None:
-        """Every pile lies inside the soil block and, when there is one, inside the cap."""
+        """Every pile lies inside the soil block and, when there is one, inside the cap.
+
+        A pile also leaves 0.2 x its radius to the cap edge: the structured mesh around it
+        (``pilegroup.geometry.plan.cell_grid``) needs that room.
+        """
         half_x, half_y = self.site.size_x_m / 2, self.site.size_y_m / 2
         r = self.piles.diameter_m / 2
         for i, (x, y) in enumerate(self.piles.xy):
             if abs(x) + r > half_x or abs(y) + r > half_y:
                 raise ScenarioError(f"piles[{i + 1}] position", [x, y],
                                     "pile lies outside the soil block", "m")
-            if self.cap is not None and (abs(x) + r > self.cap.size_x_m / 2 + 1e-12
-                                         or abs(y) + r > self.cap.size_y_m / 2 + 1e-12):
+            if self.cap is None:
+                continue
+            clear = min(self.cap.size_x_m / 2 - abs(x), self.cap.size_y_m / 2 - abs(y)) - r
+            if clear < -1e-12:
                 raise ScenarioError(f"piles[{i + 1}] position", [x, y],
                                     f"pile (diameter {self.piles.diameter_m:g} m) lies outside the"
                                     f" cap ({self.cap.size_x_m:g} x {self.cap.size_y_m:g} m)", "m")
+            if clear < 0.2 * r:
+                raise ScenarioError(f"piles[{i + 1}] position", [x, y],
+                                    f"leaves only {clear:.3g} m to the cap edge: need >= 0.2 x the"
+                                    f" radius = {0.2 * r:g} m for the structured mesh around the"
+                                    " pile", "m")
 
     def _check_cap(self) -> None:
         """The cap fits the block in plan and holds the embedded pile heads."""

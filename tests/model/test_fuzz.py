@@ -176,11 +176,11 @@ def test_validated_mutations_mesh_or_exit_2(small_pile, tmp_path, monkeypatch, c
 UNMESHABLE = [
     (None, {"numerics.mesh.growth": 2.0, "site.depth_m": 60.0, "numerics.mesh.n_circ_min": 12},
      "numerics.mesh.growth = 2.0"),  # gmsh leaves triangles in the far field
-    ("pier667", {"cap.size_x_m": 8.1}, "piles[1] position"),  # 0.05 m from pile to cap edge
+    ("pier667", {"piles.spacing_m": [1.1, 2.5]}, "piles[1] position"),  # 0.05 m to cell edge
 ]
 
 
-@pytest.mark.parametrize("case", UNMESHABLE, ids=["far-field", "cap-edge"])
+@pytest.mark.parametrize("case", UNMESHABLE, ids=["far-field", "pile-cell-edge"])
 def test_unmeshable_scenarios_exit_2(case, small_pile, tmp_path, monkeypatch, capsys):
     name, over, named = case
     monkeypatch.setenv("PILEGROUP_MESH_CACHE", str(tmp_path / "cache"))
@@ -204,6 +204,12 @@ def test_reproductions_exit_2_naming_the_key(setting, tmp_path, monkeypatch, cap
     err = capsys.readouterr().err
     _one_clean_line(rc, err)
     assert rc == EXIT_INPUT and setting.split("=")[0] in err
+
+
+def test_pile_near_the_cap_edge_does_not_validate():
+    with pytest.raises(ScenarioError, match="0.05 m to the cap edge") as info:
+        load_scenario("pier667", {"cap.size_x_m": 8.1})
+    assert info.value.key == "piles[1] position"
 
 
 def test_cell_count_guard_names_mesh_size():
