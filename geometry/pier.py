@@ -183,7 +183,7 @@ def build_gmsh_model(spec: GeometrySpec, name: str = "pilegroup") -> BuildResult
     t1 = time.perf_counter()
 
     res = BuildResult(cell_groups, facet_groups)
-    res.far_field_algorithm, res.far_field_min_sj = mesh_plan(surfaces[-1].tag)
+    res.far_field_algorithm, res.far_field_min_sj = mesh_plan(surfaces[-1].tag, spec.sizing.growth)
     gmsh.model.mesh.generate(3)
     t2 = time.perf_counter()
     res.n_circ = circumferential_divisions(spec)

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import gmsh
 import numpy as np
 
+from pilegroup.errors import ScenarioError
 from pilegroup.geometry.spec import GeometrySpec, PileSpec
 
 __all__ = [
@@ -168,8 +169,8 @@ def _breaks(vals: list[float], lo: float, hi: float) -> list[float]:
 def cell_grid(spec: GeometrySpec) -> tuple[list[float], list[float], CellPiles]:
     """Cell edges in x and y of the structured region and the pile of each pile cell.
 
-    Raises ``ValueError`` if two piles share a cell or a pile leaves less than 0.2 x its radius
-    to its cell edge.
+    Raises :class:`~pilegroup.errors.ScenarioError` (exit code 2) if two piles share a cell or
+    a pile leaves less than 0.2 x its radius to its cell edge.
     """
     x0, x1, y0, y1 = spec.structured_region()
     xb = _breaks([p.x for p in spec.piles], x0, x1)
@@ -179,14 +180,16 @@ def cell_grid(spec: GeometrySpec) -> tuple[list[float], list[float], CellPiles]:
         ix = int(np.searchsorted(xb, p.x)) - 1
         iy = int(np.searchsorted(yb, p.y)) - 1
         if (ix, iy) in cell_pile:
-            raise ValueError(f"piles {cell_pile[(ix, iy)] + 1} and {i + 1} fall into the same "
-                             "structured cell: pile positions must form a rectilinear grid")
+            raise ScenarioError(f"piles[{i + 1}] position", [p.x, p.y],
+                                f"falls into the structured cell of pile {cell_pile[(ix, iy)] + 1}"
+                                ": pile positions must form a rectilinear grid", "m")
         cx0, cx1, cy0, cy1 = xb[ix], xb[ix + 1], yb[iy], yb[iy + 1]
         clear = min(p.x - cx0, cx1 - p.x, p.y - cy0, cy1 - p.y) - p.radius
         if clear < 0.2 * p.radius:
-            raise ValueError(f"pile {i + 1} at ({p.x:g}, {p.y:g}) m leaves only {clear:.3g} m "
-                             "to its structured cell edge: piles too close to each other or to "
-                             "the cap edge (need >= 0.2 x radius)")
+            raise ScenarioError(f"piles[{i + 1}] position", [p.x, p.y],
+                                f"leaves only {clear:.3g} m to its structured cell edge: piles"
+                                " too close to each other or to the cap edge (need >= 0.2 x"
+                                " radius)", "m")
         cell_pile[(ix, iy)] = i
     return xb, yb, cell_pile
 
@@ -319,10 +322,14 @@ def set_far_field_size(spec: GeometrySpec, outline: list[int]) -> None:
     fld.setAsBackgroundMesh(f_math)
 
 
-def mesh_plan(far: int) -> tuple[int, float]:
+def mesh_plan(far: int, growth: float) -> tuple[int, float]:
     """Mesh all surfaces with the far-field algorithm giving the best all-quad plan.
 
-    ``far`` is the far-field surface. Returns (algorithm, far-field minimum scaled Jacobian).
+    ``far`` is the far-field surface, ``growth`` the sizing's (named in the error). Returns
+    (algorithm, far-field minimum scaled Jacobian). Raises
+    :class:`~pilegroup.errors.ScenarioError` naming ``numerics.mesh.growth`` when no algorithm
+    recombines the far field into quads: the sizing is one this mesher cannot build (exit 2),
+    which the user fixes by changing it.
     """
     best: tuple[float, int] | None = None
     for alg in FAR_FIELD_ALGORITHMS:
@@ -341,8 +348,10 @@ def mesh_plan(far: int) -> tuple[int, float]:
         if q >= 0.35:
             break
     if best is None:
-        raise RuntimeError("far-field recombination left triangles with every algorithm "
-                           f"{FAR_FIELD_ALGORITHMS}; change sizing.growth or h_far")
+        raise ScenarioError("numerics.mesh.growth", growth,
+                            "the far field cannot be meshed with quads at this sizing (every "
+                            f"gmsh algorithm {FAR_FIELD_ALGORITHMS} left triangles): change "
+                            "numerics.mesh.growth, far_field_size_m or size_m", "-")
     if best[1] != alg:
         gmsh.model.mesh.clear()
         gmsh.model.mesh.setAlgorithm(2, far, best[1])

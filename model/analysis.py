@@ -11,6 +11,7 @@ from dataclasses import dataclass, field
 from typing import Literal
 
 from pilegroup.errors import ScenarioError
+from pilegroup.model.bounds import check_bound
 from pilegroup.validate import (
     require_in_range,
     require_non_negative,
@@ -47,8 +48,9 @@ class InterfaceOptions:
     quadrature: Literal["nodal", "gauss"] = "nodal"
 
     def __post_init__(self) -> None:
-        require_positive("N", self.N, "-")
-        require_positive("normal_stiffness_factor", self.normal_stiffness_factor, "-")
+        for key in ("N", "normal_stiffness_factor"):
+            require_positive(key, getattr(self, key), "-")
+            check_bound(f"interface.{key}", getattr(self, key))
 
 
 @dataclass(frozen=True)
@@ -71,10 +73,12 @@ class Stage:
             if self.cap_load_kN is None:
                 raise ScenarioError("cap_load_kN", None, "missing: required for a load stage", "kN")
             require_non_negative("cap_load_kN", self.cap_load_kN, "kN")
+            check_bound("stages.cap_load_kN", self.cap_load_kN)
             if self.duration_day is None:
                 raise ScenarioError("duration_day", None, "missing: required for a load stage",
                                     "day")
             require_positive("duration_day", self.duration_day, "day")
+            check_bound("stages.duration_day", self.duration_day)
         else:
             for key in ("cap_load_kN", "duration_day"):
                 if getattr(self, key) is not None:
@@ -85,6 +89,7 @@ class Stage:
                 raise ScenarioError("until_day", self.until_day,
                                     "only allowed for a consolidation stage", "day")
             require_positive("until_day", self.until_day, "day")
+            check_bound("stages.until_day", self.until_day)
 
 
 @dataclass(frozen=True)
@@ -96,6 +101,7 @@ class Time:
 
     def __post_init__(self) -> None:
         require_positive("end_day", self.end_day, "day")
+        check_bound("time.end_day", self.end_day)
         for i, t in enumerate(self.output_days):
             if not 0.0 <= t <= self.end_day:
                 raise ScenarioError(f"output_days[{i}]", t, f"must be in [0, end_day = "
@@ -136,6 +142,7 @@ class MeshOptions:
         for key in ("size_m", "far_field_size_m", "dz_surface_m", "dz_toe_m", "dz_max_m",
                     "dz_max_deep_m", "dz_cap_m"):
             require_positive(key, getattr(self, key), "m")
+            check_bound(f"numerics.mesh.{key}", getattr(self, key))
         if self.far_field_size_m < self.size_m:
             raise ScenarioError("far_field_size_m", self.far_field_size_m,
                                 f"must be >= size_m = {self.size_m:g}", "m")
@@ -144,9 +151,11 @@ class MeshOptions:
         if self.n_circ_min < 8 or self.n_circ_min % 4:
             raise ScenarioError("n_circ_min", self.n_circ_min,
                                 "must be a multiple of 4, >= 8", "-")
+        check_bound("numerics.mesh.n_circ_min", self.n_circ_min)
         if self.min_layer_divisions < 1:
             raise ScenarioError("min_layer_divisions", self.min_layer_divisions,
                                 "must be an integer >= 1", "-")
+        check_bound("numerics.mesh.min_layer_divisions", self.min_layer_divisions)
 
 
 @dataclass(frozen=True)
@@ -174,14 +183,17 @@ class TimeStepping:
     def __post_init__(self) -> None:
         for key in ("dt_initial_day", "dt_min_day", "dt_max_day"):
             require_positive(key, getattr(self, key), "day")
+            check_bound(f"numerics.time.{key}", getattr(self, key))
         if self.dt_min_day > self.dt_initial_day or self.dt_initial_day > self.dt_max_day:
             raise ScenarioError("dt_initial_day", self.dt_initial_day,
                                 "must satisfy dt_min_day <= dt_initial_day <= dt_max_day", "day")
         if not self.grow_factor >= 1.0:
             raise ScenarioError("grow_factor", self.grow_factor, "must be >= 1", "-")
+        check_bound("numerics.time.grow_factor", self.grow_factor)
         require_in_range("cut_factor", self.cut_factor, 0.0, 1.0, "-", lo_open=True, hi_open=True)
         if self.max_newton < 1:
             raise ScenarioError("max_newton", self.max_newton, "must be an integer >= 1")
+        check_bound("numerics.time.max_newton", self.max_newton)
         if not 1 <= self.easy_newton <= self.max_newton:
             raise ScenarioError("easy_newton", self.easy_newton,
                                 f"must be in [1, max_newton = {self.max_newton}]")
@@ -230,8 +242,9 @@ class Numerics:
     solver: LinearSolver = field(default_factory=LinearSolver)
 
     def __post_init__(self) -> None:
-        require_positive("newton_rtol", self.newton_rtol, "-")
-        require_positive("newton_atol", self.newton_atol, "-")
+        for key in ("newton_rtol", "newton_atol"):
+            require_positive(key, getattr(self, key), "-")
+            check_bound(f"numerics.{key}", getattr(self, key))
         require_one_of("symmetry", self.symmetry, SYMMETRY_CHOICES)
 
 

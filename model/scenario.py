@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 
 from pilegroup.errors import ScenarioError
 from pilegroup.model.analysis import InterfaceOptions, Numerics, Outputs, Soil, Stage, Time
+from pilegroup.model.mesh_estimate import MAX_CELLS, estimated_cells
 from pilegroup.model.site import Cap, Layer, Piles, Site, Structure
 
 
@@ -41,6 +42,7 @@ class Scenario:
         self._check_stages()
         self._check_interfaces()
         self._check_gauges()
+        self._check_numerics()
 
     # ---- rules across the parts, in the order the messages report them ----
     def _check_layer_stack(self) -> None:
@@ -57,6 +59,11 @@ class Scenario:
             raise ScenarioError("piles.length_in_soil_m", toe,
                                 f"must be < site.depth_m = {depth:g} (pile longer than the block)",
                                 "m")
+        room = self.numerics.mesh.dz_toe_m
+        if depth - toe < room:
+            raise ScenarioError("piles.length_in_soil_m", toe,
+                                f"must leave room for one element below the toes: site.depth_m"
+                                f" - length >= numerics.mesh.dz_toe_m = {room:g}", "m")
         given = sum(layer.thickness_m or 0.0 for layer in self.layers)
         if self.layers[-1].thickness_m is None:
             if given >= depth:
@@ -75,18 +82,29 @@ class Scenario:
                                 " layer's thickness)", "m")
 
     def _check_plan(self) -> None:
-        """Every pile lies inside the soil block and, when there is one, inside the cap."""
+        """Every pile lies inside the soil block and, when there is one, inside the cap.
+
+        A pile also leaves 0.2 x its radius to the cap edge: the structured mesh around it
+        (``pilegroup.geometry.plan.cell_grid``) needs that room.
+        """
         half_x, half_y = self.site.size_x_m / 2, self.site.size_y_m / 2
         r = self.piles.diameter_m / 2
         for i, (x, y) in enumerate(self.piles.xy):
             if abs(x) + r > half_x or abs(y) + r > half_y:
                 raise ScenarioError(f"piles[{i + 1}] position", [x, y],
                                     "pile lies outside the soil block", "m")
-            if self.cap is not None and (abs(x) + r > self.cap.size_x_m / 2 + 1e-12
-                                         or abs(y) + r > self.cap.size_y_m / 2 + 1e-12):
+            if self.cap is None:
+                continue
+            clear = min(self.cap.size_x_m / 2 - abs(x), self.cap.size_y_m / 2 - abs(y)) - r
+            if clear < -1e-12:
                 raise ScenarioError(f"piles[{i + 1}] position", [x, y],
                                     f"pile (diameter {self.piles.diameter_m:g} m) lies outside the"
                                     f" cap ({self.cap.size_x_m:g} x {self.cap.size_y_m:g} m)", "m")
+            if clear < 0.2 * r:
+                raise ScenarioError(f"piles[{i + 1}] position", [x, y],
+                                    f"leaves only {clear:.3g} m to the cap edge: need >= 0.2 x the"
+                                    f" radius = {0.2 * r:g} m for the structured mesh around the"
+                                    " pile", "m")
 
     def _check_cap(self) -> None:
         """The cap fits the block in plan and holds the embedded pile heads."""
@@ -95,9 +113,11 @@ class Scenario:
                 raise ScenarioError("piles.embedment_m", self.piles.embedment_m,
                                     "must be 0 when there is no cap", "m")
             return
-        if self.cap.size_x_m > self.site.size_x_m or self.cap.size_y_m > self.site.size_y_m:
-            raise ScenarioError("cap.size_x_m", self.cap.size_x_m,
-                                "the cap must fit inside the soil block in plan", "m")
+        for key in ("size_x_m", "size_y_m"):
+            if getattr(self.cap, key) >= getattr(self.site, key):
+                raise ScenarioError(f"cap.{key}", getattr(self.cap, key),
+                                    f"must be < site.{key} = {getattr(self.site, key):g}: the cap"
+                                    " must lie strictly inside the soil block in plan", "m")
         if self.piles.embedment_m >= self.cap.thickness_m:
             raise ScenarioError("piles.embedment_m", self.piles.embedment_m,
                                 f"must be < cap.thickness_m = {self.cap.thickness_m:g}", "m")
@@ -145,6 +165,24 @@ class Scenario:
             if z > toe:
                 raise ScenarioError(f"outputs.gauge_depths_m[{i}]", z,
                                     f"must be <= the pile length in soil {toe:g}", "m")
+
+    def _check_numerics(self) -> None:
+        """Mesh size against the piles, smallest step against the end, cell-count estimate."""
+        m, d = self.numerics.mesh, self.piles.diameter_m
+        if m.size_m > 5.0 * d:
+            raise ScenarioError("numerics.mesh.size_m", m.size_m,
+                                f"must be <= 5 x piles.diameter_m = {5.0 * d:g} (elements much"
+                                " larger than the pile do not resolve it)", "m")
+        dt_min = self.numerics.time.dt_min_day
+        if dt_min > self.time.end_day:
+            raise ScenarioError("numerics.time.dt_min_day", dt_min,
+                                f"must be <= time.end_day = {self.time.end_day:g}", "day")
+        cells = estimated_cells(self)
+        if cells > MAX_CELLS:
+            raise ScenarioError("numerics.mesh.size_m", m.size_m,
+                                f"the mesh would have about {cells:.3g} cells (estimate), more"
+                                f" than {MAX_CELLS:.3g}: coarsen numerics.mesh (size_m,"
+                                " far_field_size_m, dz_*) or shrink the site", "m")
 
     # ---- derived quantities (internal units) ----
     def layer_top(self, i: int) -> float:

@@ -19,8 +19,18 @@ from dataclasses import dataclass
 
 from pilegroup.constitutive.paper import delta_eq17
 from pilegroup.errors import ScenarioError
+from pilegroup.model.bounds import check_bound
 from pilegroup.model.units import KPA_PER_MPA, unit_weight_from_density
-from pilegroup.validate import require_in_range, require_non_negative, require_positive
+from pilegroup.validate import (
+    require_finite,
+    require_in_range,
+    require_non_negative,
+    require_positive,
+)
+
+#: At most this many piles: the mesh names its pile groups ``pile_1`` .. ``pile_99``
+#: (``pilegroup.geometry.groups``), and the overlap check is quadratic in the count.
+MAX_PILES = 99
 
 
 def _require_friction_angle(key: str, value: float) -> None:
@@ -33,8 +43,9 @@ class _ElasticMPa:
     E_MPa: float
     nu: float
 
-    def _check_elastic(self) -> None:
+    def _check_elastic(self, table: str) -> None:
         require_positive("E_MPa", self.E_MPa, "MPa")
+        check_bound(f"{table}.E_MPa", self.E_MPa)
         require_in_range("nu", self.nu, 0.0, 0.5, "-", lo_open=True, hi_open=True)
 
     @property
@@ -59,9 +70,12 @@ class InterfaceParams:
 
     def __post_init__(self) -> None:
         require_positive("K", self.K, "-")
+        check_bound("layers.interface.K", self.K)
         require_non_negative("n", self.n, "-")
+        check_bound("layers.interface.n", self.n)
         require_in_range("R_f", self.R_f, 0.0, 1.0, "-", hi_open=True)
         require_positive("eta_MPa_day", self.eta_MPa_day, "MPa·day/m")
+        check_bound("layers.interface.eta_MPa_day", self.eta_MPa_day)
         if self.delta_deg is not None:
             _require_friction_angle("delta_deg", self.delta_deg)
 
@@ -108,17 +122,20 @@ class Layer(_ElasticMPa):
             raise ScenarioError("name", self.name, "must be a non-empty string")
         if self.thickness_m is not None:
             require_positive("thickness_m", self.thickness_m, "m")
+            check_bound("layers.thickness_m", self.thickness_m)
         require_positive("gamma_kN_per_m3", self.gamma_kN_per_m3, "kN/m^3")
-        self._check_elastic()
+        check_bound("layers.gamma_kN_per_m3", self.gamma_kN_per_m3)
+        self._check_elastic("layers")
         _require_friction_angle("phi_deg", self.phi_deg)
         require_non_negative("c_kPa", self.c_kPa, "kPa")
+        check_bound("layers.c_kPa", self.c_kPa)
         if not 0.0 <= self.psi_deg <= self.phi_deg:
             raise ScenarioError("psi_deg", self.psi_deg,
                                 f"must be in [0, phi_deg = {self.phi_deg}]", "degree")
-        require_positive("k_m_per_day", self.k_m_per_day, "m/day")
-        if self.k_h_m_per_day is not None:
-            require_positive("k_h_m_per_day", self.k_h_m_per_day, "m/day")
-        require_positive("e0", self.e0, "-")
+        for key in ("k_m_per_day", "k_h_m_per_day", "e0"):
+            if getattr(self, key) is not None:
+                require_positive(key, getattr(self, key), "-" if key == "e0" else "m/day")
+                check_bound(f"layers.{key}", getattr(self, key))
 
     @property
     def porosity(self) -> float:
@@ -150,9 +167,10 @@ class _PlanRectangle:
     size_x_m: float
     size_y_m: float
 
-    def __post_init__(self) -> None:
-        require_positive("size_x_m", self.size_x_m, "m")
-        require_positive("size_y_m", self.size_y_m, "m")
+    def _check_plan_size(self, table: str) -> None:
+        for key in ("size_x_m", "size_y_m"):
+            require_positive(key, getattr(self, key), "m")
+            check_bound(f"{table}.{key}", getattr(self, key))
 
 
 @dataclass(frozen=True)
@@ -163,8 +181,9 @@ class Site(_PlanRectangle):
     water_table_depth_m: float = 0.0
 
     def __post_init__(self) -> None:
-        super().__post_init__()
+        self._check_plan_size("site")
         require_positive("depth_m", self.depth_m, "m")
+        check_bound("site.depth_m", self.depth_m)
         require_non_negative("water_table_depth_m", self.water_table_depth_m, "m")
         if self.water_table_depth_m > self.depth_m:
             raise ScenarioError("water_table_depth_m", self.water_table_depth_m,
@@ -188,14 +207,24 @@ class Piles:
 
     def __post_init__(self) -> None:
         require_positive("diameter_m", self.diameter_m, "m")
+        check_bound("piles.diameter_m", self.diameter_m)
         require_positive("length_in_soil_m", self.length_in_soil_m, "m")
+        check_bound("piles.length_in_soil_m", self.length_in_soil_m)
         require_non_negative("embedment_m", self.embedment_m, "m")
+        self._check_layout()
+        self._check_overlap()
+
+    def _check_layout(self) -> None:
+        """Either finite positions or a grid (with spacing when > 1 x 1), at most MAX_PILES."""
         if self.positions_m is not None:
             if self.grid is not None or self.spacing_m is not None:
                 raise ScenarioError("positions_m", list(self.positions_m),
                                     "give either positions_m or grid + spacing_m, not both", "m")
             if len(self.positions_m) == 0:
                 raise ScenarioError("positions_m", [], "must list at least one pile", "m")
+            for i, xy in enumerate(self.positions_m):
+                for j, v in enumerate(xy):
+                    require_finite(f"positions_m[{i}][{j}]", v, "m")
         else:
             if self.grid is None:
                 raise ScenarioError("grid", None, "missing: give grid = [nx, ny] with spacing_m,"
@@ -211,6 +240,14 @@ class Piles:
             else:
                 for i, v in enumerate(self.spacing_m):
                     require_positive(f"spacing_m[{i}]", v, "m")
+        n = len(self.positions_m) if self.positions_m is not None else math.prod(self.grid)
+        if n > MAX_PILES:
+            raise ScenarioError("positions_m" if self.positions_m is not None else "grid", n,
+                                f"at most {MAX_PILES} piles (the mesh names pile_1 .. "
+                                f"pile_{MAX_PILES})", "-")
+
+    def _check_overlap(self) -> None:
+        """No two pile cross-sections overlap."""
         xy = self.xy
         for i in range(len(xy)):
             for j in range(i):
@@ -246,8 +283,9 @@ class Cap(_PlanRectangle):
     in_contact_with_soil: bool = False
 
     def __post_init__(self) -> None:
-        super().__post_init__()
+        self._check_plan_size("cap")
         require_positive("thickness_m", self.thickness_m, "m")
+        check_bound("cap.thickness_m", self.thickness_m)
 
 
 @dataclass(frozen=True)
@@ -259,8 +297,9 @@ class Structure(_ElasticMPa):
     density_kg_per_m3: float
 
     def __post_init__(self) -> None:
-        self._check_elastic()
+        self._check_elastic("structure")
         require_positive("density_kg_per_m3", self.density_kg_per_m3, "kg/m^3")
+        check_bound("structure.density_kg_per_m3", self.density_kg_per_m3)
 
     @property
     def gamma(self) -> float:

@@ -47,12 +47,13 @@ def require_non_negative(key: str, value: object, unit: str = "", *,
 
 
 def require_in_range(key: str, value: object, lo: float, hi: float, unit: str = "", *,
-                     lo_open: bool = False, hi_open: bool = False,
+                     lo_open: bool = False, hi_open: bool = False, why: str = "",
                      error: ErrorClass = ScenarioError) -> None:
     """Raise ``error`` unless ``value`` is a finite number in the interval from lo to hi.
 
     The bounds are closed unless ``lo_open`` / ``hi_open``; the message shows the interval in
-    the usual notation, e.g. ``must be in [0, 60)``.
+    the usual notation, e.g. ``must be in [0, 60)``, followed by ``why`` (the source of the
+    bounds) in parentheses when given.
     """
     ok = is_finite_number(value)
     if ok:
@@ -60,7 +61,8 @@ def require_in_range(key: str, value: object, lo: float, hi: float, unit: str = 
         ok = ok and (value < hi if hi_open else value <= hi)  # type: ignore[operator]
     if not ok:
         interval = f"{'(' if lo_open else '['}{lo:g}, {hi:g}{')' if hi_open else ']'}"
-        raise error.invalid(key, value, f"must be in {interval}", unit)
+        reason = f" ({why})" if why else ""
+        raise error.invalid(key, value, f"must be in {interval}{reason}", unit)
 
 
 def require_one_of(key: str, value: object, choices: Iterable[object], *,

@@ -1,0 +1,118 @@
+"""Physical ranges of the scenario's numbers: one table, each range with its source.
+
+A value outside its range is not a foundation on earth (or would make the mesh or the solver
+fail far from the input), so the scenario rejects it with a
+:class:`~pilegroup.errors.ScenarioError` whose "allowed" text gives the range and its source.
+The keys are the TOML paths without list indices (``layers.E_MPa`` covers every layer);
+docs/model.md ("Physical ranges of the scenario") lists the same table, and
+``tests/model/test_fuzz.py`` checks that every key here is in it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from pilegroup.validate import require_in_range
+
+
+@dataclass(frozen=True)
+class Bound:
+    """The interval ``lo .. hi`` (closed unless ``lo_open`` / ``hi_open``) in ``unit``."""
+
+    lo: float
+    hi: float
+    unit: str
+    source: str
+    lo_open: bool = False
+    hi_open: bool = False
+
+
+_PLAN = "a block a few pile lengths wide; 2 km bounds the zone of influence of any foundation"
+_SOIL_E = "very soft clay and peat (~0.1 MPa) to intact rock (~100 GPa)"
+_K = ("impervious clay to clean gravel, Terzaghi & Peck: 1e-6 to 1e3 m/day, with 6 decades "
+      "below for practically undrained studies")
+_DZ = "1 cm resolves any layer the model accepts; 100 m exceeds any layer or block depth"
+_DT = "1e-9 day (0.1 ms) to time.end_day's limit"
+
+#: Every bounded scenario key -> its range.
+BOUNDS: dict[str, Bound] = {
+    "site.size_x_m": Bound(1.0, 2000.0, "m", _PLAN),
+    "site.size_y_m": Bound(1.0, 2000.0, "m", _PLAN),
+    "site.depth_m": Bound(1.0, 500.0, "m",
+                          "the longest piles (~150 m) plus 2-3 pile lengths below the toes"),
+    "layers.thickness_m": Bound(0.05, 500.0, "m",
+                                "a thinner stratum is a lens, not a layer; at most site.depth_m"),
+    "layers.gamma_kN_per_m3": Bound(10.0, 25.0, "kN/m^3",
+                                    "saturated soils: peat ~10-12, dense gravel and rockfill ~23"),
+    "layers.E_MPa": Bound(0.1, 1.0e5, "MPa", _SOIL_E),
+    "layers.c_kPa": Bound(0.0, 1000.0, "kPa", "clean sand (0) to hard clay and weak rock (~1 MPa)"),
+    "layers.k_m_per_day": Bound(1.0e-12, 1.0e3, "m/day", _K),
+    "layers.k_h_m_per_day": Bound(1.0e-12, 1.0e3, "m/day", _K),
+    "layers.e0": Bound(0.1, 5.0, "-",
+                       "dense sand and gravel (~0.3) to very soft clay and peat (~5)"),
+    "layers.interface.K": Bound(1.0, 1.0e5, "-",
+                                "Clough-Duncan modulus numbers of soils ~50-5000 (paper: 296-820)"),
+    "layers.interface.n": Bound(0.0, 2.0, "-", "Clough-Duncan exponents ~0.2-1 (paper: 0.28-0.52)"),
+    "layers.interface.eta_MPa_day": Bound(1.0e-3, 1.0e6, "MPa·day/m",
+                                          "paper Table 1: 6-53; four decades either side"),
+    "piles.diameter_m": Bound(0.1, 5.0, "m",
+                              "bored and driven piles: micropiles 0.1 m to large bored piles 5 m"),
+    "piles.length_in_soil_m": Bound(1.0, 150.0, "m",
+                                    "bored and driven piles in practice: up to ~150 m"),
+    "cap.size_x_m": Bound(0.1, 2000.0, "m", "at least a pile diameter; at most the block"),
+    "cap.size_y_m": Bound(0.1, 2000.0, "m", "at least a pile diameter; at most the block"),
+    "cap.thickness_m": Bound(0.2, 20.0, "m",
+                             "pile caps and rafts: 0.2 m slabs to 20 m caisson-like caps"),
+    "structure.E_MPa": Bound(1.0e3, 3.0e5, "MPa",
+                             "timber (~10 GPa), concrete (25-45 GPa), steel (210 GPa)"),
+    "structure.density_kg_per_m3": Bound(300.0, 10000.0, "kg/m^3",
+                                         "timber (~400) to steel (7850)"),
+    "interface.N": Bound(0.0, 20.0, "-", "Perzyna exponents of soils ~1-10 (paper: 1)",
+                         lo_open=True),
+    "interface.normal_stiffness_factor": Bound(1.0, 1.0e6, "-",
+                                               "a penalty softer than the soil opens gaps; "
+                                               "above 1e6 the system loses ~6 digits"),
+    "stages.cap_load_kN": Bound(0.0, 1.0e9, "kN",
+                                "the largest foundations carry ~1e6 kN; 1e9 is a typo guard",
+                                hi_open=True),
+    "stages.duration_day": Bound(1.0e-9, 1.0e5, "day", _DT),
+    "stages.until_day": Bound(1.0e-9, 1.0e5, "day", _DT),
+    "time.end_day": Bound(1.0e-9, 1.0e5, "day",
+                          "design lives are <= ~120 years; 1e5 days is 274 years"),
+    "numerics.time.dt_initial_day": Bound(1.0e-9, 1.0e5, "day", _DT),
+    "numerics.time.dt_min_day": Bound(1.0e-9, 1.0e5, "day", _DT),
+    "numerics.time.dt_max_day": Bound(1.0e-9, 1.0e5, "day", _DT),
+    "numerics.time.grow_factor": Bound(1.0, 10.0, "-",
+                                       "faster growth skips the consolidation it should follow"),
+    "numerics.time.max_newton": Bound(1, 1000, "-", "Newton converges in ~5-20 iterations or not"),
+    "numerics.newton_rtol": Bound(1.0e-14, 0.1, "-",
+                                  "above machine precision; below 10 % of the first residual"),
+    "numerics.newton_atol": Bound(0.0, 1.0e3, "-", "residual units kN and m^3", lo_open=True),
+    "numerics.mesh.size_m": Bound(0.01, 10.0, "m",
+                                  "the paper's mesh study uses 0.1-1 m; also <= 5 x pile diameter"),
+    "numerics.mesh.far_field_size_m": Bound(0.01, 200.0, "m",
+                                            "at least 10 elements across the largest block"),
+    "numerics.mesh.dz_surface_m": Bound(0.01, 100.0, "m", _DZ),
+    "numerics.mesh.dz_toe_m": Bound(0.01, 100.0, "m", _DZ),
+    "numerics.mesh.dz_max_m": Bound(0.01, 100.0, "m", _DZ),
+    "numerics.mesh.dz_max_deep_m": Bound(0.01, 100.0, "m", _DZ),
+    "numerics.mesh.dz_cap_m": Bound(0.01, 100.0, "m", _DZ),
+    "numerics.mesh.n_circ_min": Bound(8, 256, "-",
+                                      "8 edges: 10 % area error; 256: 0.01 %, finer is waste"),
+    "numerics.mesh.min_layer_divisions": Bound(1, 100, "-",
+                                               "more elements per layer come from dz_* instead"),
+}
+
+
+def check_bound(path: str, value: object, key: str | None = None) -> None:
+    """Raise :class:`~pilegroup.errors.ScenarioError` unless ``value`` is in ``BOUNDS[path]``.
+
+    The error names ``key`` (default: the last part of ``path``, which the loader prefixes
+    with the table's dotted path).
+    """
+    b = BOUNDS[path]
+    require_in_range(key or path.rsplit(".", 1)[-1], value, b.lo, b.hi, b.unit,
+                     lo_open=b.lo_open, hi_open=b.hi_open, why=b.source)
+
+
+__all__ = ["BOUNDS", "Bound", "check_bound"]

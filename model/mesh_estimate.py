@@ -1,0 +1,77 @@
+"""A rough, conservative count of the cells a scenario's mesh will have, before any meshing.
+
+The mesh is plan quads extruded down through the layers (docs/geometry.md), so the count is
+(plan quads) x (element layers), each estimated from the sizing keys of ``numerics.mesh``:
+
+* plan: around each pile the element size grows from ``h_eff = min(size_m, pi d /
+  n_circ_min)`` by the factor ``growth`` per element up to ``far_field_size_m`` (``h_far``);
+  integrating ``1 / size^2`` over that graded annulus gives ``2 pi R / a (1/h_eff - 1/h_far) +
+  2 pi / a^2 (ln(h_far/h_eff) + h_eff/h_far - 1)`` quads per pile (``a = growth - 1``), and the
+  rest of the block holds ``area / h_far^2``;
+* vertical: the same graded integral of ``1 / dz`` from the ground surface and the pile toes,
+  plus ``min_layer_divisions + 1`` per slab (rounding up per layer, toe cut and cap).
+
+The product times :data:`SAFETY` is above the real cell count of the whole model by 1.3-3x
+for the bundled scenarios and the benchmark meshes (h = 0.1-1 m; ``tests/model/test_fuzz.py``
+checks the bound on meshes); a symmetry-reduced model has a half or a quarter of those cells.
+:data:`MAX_CELLS` is the largest estimate a scenario may have.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:  # the scenario imports this module
+    from pilegroup.model.scenario import Scenario
+
+#: Largest estimated cell count accepted: ~50 GB of memory for a Q1-Q1 Biot system with a
+#: direct solver, far beyond the 2-core machines the tool targets.
+MAX_CELLS = 50_000_000
+#: Factor on the graded-mesh integral (the quads are not the ideal sizes everywhere).
+SAFETY = 2.0
+
+
+def graded_count(length: float, start: float, cap: float, growth: float) -> float:
+    """Elements across ``length`` (m) graded from ``start`` by ``growth`` up to ``cap`` (m)."""
+    a = growth - 1.0
+    start = min(start, cap)
+    reach = (cap - start) / a
+    if length <= reach:
+        return math.log1p(a * length / start) / a
+    return math.log(cap / start) / a + (length - reach) / cap
+
+
+def plan_quads(sc: Scenario) -> float:
+    """Estimated plan quads of the whole block (no symmetry reduction)."""
+    m = sc.numerics.mesh
+    d = sc.piles.diameter_m
+    h_far = max(m.far_field_size_m, m.size_m)
+    h = min(m.size_m, math.pi * d / m.n_circ_min, h_far)
+    a = m.growth - 1.0
+    per_pile = (math.pi * d / a * (1.0 / h - 1.0 / h_far)
+                + 2.0 * math.pi / a ** 2 * (math.log(h_far / h) + h / h_far - 1.0))
+    return sc.piles.count * per_pile + sc.site.size_x_m * sc.site.size_y_m / h_far ** 2
+
+
+def element_layers(sc: Scenario) -> float:
+    """Estimated element layers of the extrusion (soil and cap)."""
+    m = sc.numerics.mesh
+    toe, depth = sc.piles.length_in_soil_m, sc.site.depth_m
+    n = (graded_count(toe / 2, m.dz_surface_m, m.dz_max_m, m.dz_growth)
+         + graded_count(toe / 2, m.dz_toe_m, m.dz_max_m, m.dz_growth)
+         + graded_count(depth - toe, m.dz_toe_m, m.dz_max_deep_m, m.dz_growth))
+    slabs = len(sc.layers) + 1
+    if sc.cap is not None:
+        n += sc.cap.thickness_m / m.dz_cap_m
+        slabs += 2
+    return n + slabs * (m.min_layer_divisions + 1)
+
+
+def estimated_cells(sc: Scenario) -> float:
+    """Conservative estimate of the mesh's hexahedra (see the module docstring)."""
+    return SAFETY * plan_quads(sc) * element_layers(sc)
+
+
+__all__ = ["MAX_CELLS", "SAFETY", "element_layers", "estimated_cells", "graded_count",
+           "plan_quads"]
