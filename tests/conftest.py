@@ -3,9 +3,30 @@
 So dolfinx_solver is imported before dolfinx/petsc4py, whatever a test module's import order.
 """
 
+import os
+import subprocess
+import sys
+from pathlib import Path
+
 import pytest  # noqa: E402
 
 import pilegroup  # noqa: F401
+
+BIN = Path(sys.executable).parent
+
+
+def _run_cli(scenario, out, ranks=1, sets=(), cache=None, timeout=900):
+    """``pilegroup run SCENARIO --out OUT --set ...`` on ``ranks`` ranks, under a timeout.
+
+    Returns the completed process; ``cache``: the mesh cache folder (default: next to OUT).
+    """
+    cmd = [str(BIN / "pilegroup"), "run", str(scenario), "--out", str(out)]
+    cmd += [a for kv in sets for a in ("--set", kv)]
+    if ranks > 1:
+        cmd = [str(BIN / "mpirun"), "-n", str(ranks), *cmd]
+    cache = cache or Path(out).parent / "cache"
+    return subprocess.run(cmd, capture_output=True, text=True, timeout=timeout,
+                          env={**os.environ, "PILEGROUP_MESH_CACHE": str(cache)})
 
 
 def small_pile_text() -> str:
@@ -55,3 +76,10 @@ def small_pile_run(request, tmp_path_factory):
         mp.setenv("PILEGROUP_MESH_CACHE", str(base / "cache"))
         run_scenario(load_scenario(f), base / "run")
     return base / "run"
+
+
+@pytest.fixture(scope="session")
+def run_cli():
+    """``run_cli(scenario, out, ranks=1, sets=(), ...)``: ``pilegroup run`` under a timeout."""
+    return _run_cli
+

@@ -6,26 +6,15 @@ the ranks sum the same terms in another order, nothing else differs.
 """
 
 import csv
-import os
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
 
-BIN = Path(sys.executable).parent
 
-
-def _run(tmp: Path, scenario: Path, ranks: int) -> Path:
-    out = tmp / f"n{ranks}"
-    cmd = [str(BIN / "pilegroup"), "run", str(scenario), "--out", str(out),
-           "--set", "outputs.plots=false"]
-    if ranks > 1:
-        cmd = [str(BIN / "mpirun"), "-n", str(ranks), *cmd]
-    r = subprocess.run(cmd, capture_output=True, text=True, timeout=600,
-                       env={**os.environ, "PILEGROUP_MESH_CACHE": str(tmp / "cache")})
+def _run(run_cli, tmp: Path, scenario: Path, ranks: int) -> Path:
+    r = run_cli(scenario, tmp / f"n{ranks}", ranks, ["outputs.plots=false"])
     assert r.returncode == 0, r.stderr[-3000:]
-    return out
+    return tmp / f"n{ranks}"
 
 
 def _values(out: Path) -> dict[tuple[str, ...], float]:
@@ -39,18 +28,18 @@ def _values(out: Path) -> dict[tuple[str, ...], float]:
 
 
 @pytest.fixture(scope="module")
-def serial(tmp_path_factory, small_pile_source):
+def serial(run_cli, tmp_path_factory, small_pile_source):
     tmp = tmp_path_factory.mktemp("ranks")
     f = tmp / "small_pile.toml"
     f.write_text(small_pile_source)
-    return tmp, f, _values(_run(tmp, f, 1))
+    return tmp, f, _values(_run(run_cli, tmp, f, 1))
 
 
 @pytest.mark.mpi
 @pytest.mark.parametrize("ranks", [3, 4])
-def test_rank_count_gives_the_serial_answer(serial, ranks):
+def test_rank_count_gives_the_serial_answer(run_cli, serial, ranks):
     tmp, f, ref = serial
-    got = _values(_run(tmp, f, ranks))
+    got = _values(_run(run_cli, tmp, f, ranks))
     assert got.keys() == ref.keys()
     for k, v in ref.items():
         assert got[k] == pytest.approx(v, rel=1e-8, abs=1e-12), k

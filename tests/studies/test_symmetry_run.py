@@ -12,15 +12,10 @@ about 5 % (far field 8 m vs 2 m). The quarter runs serially and under ``mpirun -
 
 import csv
 import json
-import os
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
-
-BIN = Path(sys.executable).parent
 
 
 def group_text(single_pile: str) -> str:
@@ -30,18 +25,12 @@ def group_text(single_pile: str) -> str:
         .replace("far_field_size_m = 8.0", "far_field_size_m = 2.0")
 
 
-def _run(tmp: Path, text: str, name: str, symmetry: str, ranks: int = 1) -> Path:
+def _run(run_cli, tmp: Path, text: str, name: str, symmetry: str, ranks: int = 1) -> Path:
     f = tmp / "group.toml"
     f.write_text(text)
-    out = tmp / name
-    cmd = [str(BIN / "pilegroup"), "run", str(f), "--out", str(out),
-           "--set", f"numerics.symmetry='{symmetry}'"]
-    if ranks > 1:
-        cmd = [str(BIN / "mpirun"), "-n", str(ranks), *cmd]
-    r = subprocess.run(cmd, capture_output=True, text=True, timeout=900,
-                       env={**os.environ, "PILEGROUP_MESH_CACHE": str(tmp / "c")})
+    r = run_cli(f, tmp / name, ranks, [f"numerics.symmetry='{symmetry}'"])
     assert r.returncode == 0, r.stderr[-3000:]
-    return out
+    return tmp / name
 
 
 def _rows(path: Path) -> list[dict[str, str]]:
@@ -82,14 +71,14 @@ def group(small_pile_source):
 
 
 @pytest.fixture(scope="module")
-def full_run(tmp_path_factory, group):
-    return _run(tmp_path_factory.mktemp("group_full"), group, "full", "none")
+def full_run(run_cli, tmp_path_factory, group):
+    return _run(run_cli, tmp_path_factory.mktemp("group_full"), group, "full", "none")
 
 
-def test_quarter_matches_full(full_run, group, tmp_path):
-    _compare(full_run, _run(tmp_path, group, "quarter", "quarter"))
+def test_quarter_matches_full(run_cli, full_run, group, tmp_path):
+    _compare(full_run, _run(run_cli, tmp_path, group, "quarter", "quarter"))
 
 
 @pytest.mark.mpi
-def test_quarter_under_mpirun_matches_full(full_run, group, tmp_path):
-    _compare(full_run, _run(tmp_path, group, "quarter", "quarter", ranks=2))
+def test_quarter_under_mpirun_matches_full(run_cli, full_run, group, tmp_path):
+    _compare(full_run, _run(run_cli, tmp_path, group, "quarter", "quarter", ranks=2))
