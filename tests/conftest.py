@@ -83,3 +83,18 @@ def run_cli():
     """``run_cli(scenario, out, ranks=1, sets=(), ...)``: ``pilegroup run`` under a timeout."""
     return _run_cli
 
+
+def _rerun_under_mpirun(test_file, ranks=2, timeout=600):
+    """Run the other tests of ``test_file`` under ``mpirun -n ranks`` (those without "mpirun"
+    in their name); a dead rank ends at ``timeout`` s instead of hanging CI."""
+    r = subprocess.run([str(BIN / "mpirun"), "-n", str(ranks), sys.executable, "-m", "pytest",
+                        "-q", "-x", "-p", "no:cacheprovider", str(test_file), "-k", "not mpirun"],
+                       capture_output=True, text=True, timeout=timeout)
+    assert r.returncode == 0, r.stdout[-3000:] + r.stderr[-3000:]
+
+
+@pytest.fixture(scope="session")
+def rerun_under_mpirun():
+    """``rerun_under_mpirun(__file__)``: the file's serial tests again on 2 ranks."""
+    return _rerun_under_mpirun
+

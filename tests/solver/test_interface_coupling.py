@@ -5,8 +5,6 @@ plane x = 1 carries the shaft facet groups. References are exact (areas, linear 
 tolerances are round-off (1e-12 relative).
 """
 
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -133,12 +131,5 @@ def test_residual_and_tangent(degree):
 
 
 @pytest.mark.mpi
-def test_interface_coupling_under_mpirun():
-    import subprocess
-
-    venv_bin = Path(sys.executable).parent
-    mpirun = venv_bin / "mpirun"
-    r = subprocess.run([str(mpirun), "-n", "2", sys.executable, "-m", "pytest", "-q", "-x",
-                        "-p", "no:cacheprovider", __file__, "-k", "not mpirun"],
-                       capture_output=True, text=True, timeout=600)
-    assert r.returncode == 0, r.stdout[-3000:] + r.stderr[-3000:]
+def test_interface_coupling_under_mpirun(rerun_under_mpirun):
+    rerun_under_mpirun(__file__)

@@ -6,8 +6,6 @@ central finite differences of the assembled monolithic residual of a BiotProblem
 under ``mpirun -n 2`` (the interface plane may then lie on the partition boundary).
 """
 
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -241,11 +239,5 @@ def test_gauss_needs_q1_and_a_valid_name():
 
 
 @pytest.mark.mpi
-def test_interface_gauss_under_mpirun():
-    import subprocess
-
-    mpirun = Path(sys.executable).parent / "mpirun"
-    r = subprocess.run([str(mpirun), "-n", "2", sys.executable, "-m", "pytest", "-q", "-x",
-                        "-p", "no:cacheprovider", __file__, "-k", "not mpirun"],
-                       capture_output=True, text=True, timeout=600)
-    assert r.returncode == 0, r.stdout[-3000:] + r.stderr[-3000:]
+def test_interface_gauss_under_mpirun(rerun_under_mpirun):
+    rerun_under_mpirun(__file__)

@@ -1,9 +1,6 @@
 """A failing iterative preset hands over to its fallback with one warning and the same answer."""
 
 import logging
-import subprocess
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -74,9 +71,5 @@ def test_a_preset_without_fallback_fails_the_step():
 
 
 @pytest.mark.mpi
-def test_linear_fallback_under_mpirun():
-    mpirun = Path(sys.executable).parent / "mpirun"
-    r = subprocess.run([str(mpirun), "-n", "2", sys.executable, "-m", "pytest", "-q", "-x",
-                        "-p", "no:cacheprovider", __file__, "-k", "not mpirun"],
-                       capture_output=True, text=True, timeout=600)
-    assert r.returncode == 0, r.stdout[-3000:] + r.stderr[-3000:]
+def test_linear_fallback_under_mpirun(rerun_under_mpirun):
+    rerun_under_mpirun(__file__)

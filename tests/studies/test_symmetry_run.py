@@ -28,7 +28,7 @@ def group_text(single_pile: str) -> str:
 def _run(run_cli, tmp: Path, text: str, name: str, symmetry: str, ranks: int = 1) -> Path:
     f = tmp / "group.toml"
     f.write_text(text)
-    r = run_cli(f, tmp / name, ranks, [f"numerics.symmetry='{symmetry}'"])
+    r = run_cli(f, tmp / name, ranks, [f"numerics.symmetry='{symmetry}'"], timeout=900)
     assert r.returncode == 0, r.stderr[-3000:]
     return tmp / name
 
