@@ -250,7 +250,11 @@ class Numerics:
 
 @dataclass(frozen=True)
 class Outputs:
-    """What to write. ``gauge_depths_m``: depths below ground of the pile gauge sections."""
+    """What to write.
+
+    ``gauge_depths_m``: depths below ground of the pile gauge sections, top down (strictly
+    increasing).
+    """
 
     xdmf: bool = True
     plots: bool = True
@@ -259,3 +263,8 @@ class Outputs:
     def __post_init__(self) -> None:
         for i, z in enumerate(self.gauge_depths_m):
             require_non_negative(f"gauge_depths_m[{i}]", z, "m")
+            if i and not z > self.gauge_depths_m[i - 1]:
+                raise ScenarioError(f"gauge_depths_m[{i}]", z,
+                                    f"must be greater than gauge_depths_m[{i - 1}] = "
+                                    f"{self.gauge_depths_m[i - 1]:g} (sections are listed top "
+                                    "down, each below the one before)", "m")

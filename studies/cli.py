@@ -53,7 +53,8 @@ DESCRIPTIONS = {
               "Mandel (table, JSON and PNG); pier: the whole job per mesh size and symmetry "
               "(unknowns, Newton and Krylov counts, factorisations, wall, peak memory)."),
     "report": ("Read the CSV and JSON files of a finished or interrupted run (settlement.csv, "
-               "pile_profiles.csv, layer_history.csv, pile_loads.csv, summary.json), write PNG "
+               "pile_profiles.csv, layer_history.csv, pile_loads.csv, load_settlement.csv, "
+               "gauges.csv, summary.json), write PNG "
                "figures to OUT_DIR/plots (figures whose file is missing are skipped) and, with "
                "--markdown, a results section. A CSV with a wrong header is invalid input "
                "(exit 2)."),

@@ -14,3 +14,11 @@ EARLY_DAY = 89.0
 #: settlement of the pier (its field data are strains, friction and relative displacement).
 PAPER_SETTLEMENT_CM: dict[float, float] = {1.0: 36.5, 0.8: 35.2, 0.6: 34.6, 0.3: 30.3, 0.1: 30.2}
 PAPER_MESH_M = 0.3
+
+#: Times (days) of the gauge profile figures: the start and end of the paper's 317 days of
+#: monitoring (Section 2), its 89-day early period and two times between; a run's figures use
+#: its nearest output times.
+PAPER_PROFILE_DAYS = (0.0, 30.0, 89.0, 180.0, 317.0)
+#: Gauge sections whose measured histories the paper compares with its simulation (Section 5,
+#: Figures 12 and 13: test sections 1, 5, 11 and 17).
+PAPER_HISTORY_SECTIONS = (1, 5, 11, 17)

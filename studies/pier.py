@@ -47,7 +47,9 @@ from pilegroup.solver import (
     run_summary,
 )
 from pilegroup.solver.probes import facet_area
+from pilegroup.studies.gauge_probe import GaugeProbe
 from pilegroup.studies.piles import LoadSettlementCurve, PileProbe, SettlementSeries
+from pilegroup.studies.tables import GAUGES_CSV
 
 log = logging.getLogger(__name__)
 
@@ -207,7 +209,9 @@ def run_coupled(sc: Scenario, md: MeshData, out: Path, preset: str | None = None
     """Run every stage of ``sc`` on ``md`` with the scenario's exports; returns the summary.
 
     Exports, written at every output time: ``settlement.csv``, the pile tables
-    (:class:`~pilegroup.studies.piles.PileProbe`), ``results*.xdmf`` (when
+    (:class:`~pilegroup.studies.piles.PileProbe`), ``gauges.csv`` (when the scenario has
+    ``outputs.gauge_depths_m``: :class:`~pilegroup.studies.gauge_probe.GaugeProbe`),
+    ``results*.xdmf`` (when
     ``outputs.xdmf``) and ``summary_solver.json`` (``complete: false`` until the end, then the
     full run summary).
     """
@@ -216,12 +220,14 @@ def run_coupled(sc: Scenario, md: MeshData, out: Path, preset: str | None = None
     pb = build_problem(sc, md, preset, mesh_size)
     settlement = SettlementSeries(pb, load_facets(sc, md), out / "settlement.csv")
     piles = PileProbe(sc, pb, out)
+    gauges = GaugeProbe(sc, pb, piles, out / GAUGES_CSV) if sc.outputs.gauge_depths_m else None
 
     def summary(complete: bool) -> dict[str, Any]:
         return {"complete": complete, "dofs": pb.num_dofs, "centre_pile": piles.centre,
                 "interface_mode": sc.interface.mode,
                 "symmetry": {"model": symmetry[0], "reason": symmetry[1]},
                 "element": sc.numerics.element, "preset": pb.linear_solver.preset,
+                "gauge_sections": gauges.summary() if gauges is not None else None,
                 "settlement_m": [{"t_day": t, "stage": s, "settlement_m": w}
                                  for t, s, w in settlement.history],
                 "settlement_sign": "positive = downward (compression-positive habit)",
@@ -231,6 +237,8 @@ def run_coupled(sc: Scenario, md: MeshData, out: Path, preset: str | None = None
     curve = LoadSettlementCurve(pb, settlement.probe, sc.total_cap_load(),
                                 out / "load_settlement.csv")
     exports: list[Export] = [settlement, piles, curve]
+    if gauges is not None:
+        exports.append(gauges)
     if sc.outputs.xdmf:
         exports.append(XDMFSeries(pb, out / "results.xdmf", xdmf_label(symmetry[0])))
     exports.append(writer)

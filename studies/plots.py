@@ -14,6 +14,7 @@ from matplotlib import colormaps
 from matplotlib.figure import Figure
 
 from pilegroup.fileio import atomic_path
+from pilegroup.studies.gauge_plots import GAUGE_FIGURES
 from pilegroup.studies.paper import EARLY_DAY, PAPER_MESH_M, PAPER_SETTLEMENT_CM, SOFT_LAYERS
 from pilegroup.studies.rundata import (
     RunData,
@@ -182,6 +183,7 @@ FIGURES: tuple[tuple[str, str, str, Callable[[RunData], Figure]], ...] = (
     ("pile_loads.png", "Pile head forces at the last output time", "loads", plot_pile_loads),
     ("load_settlement.png", "Load–settlement curve (every accepted step)", "load_settlement",
      plot_load_settlement),
+    *GAUGE_FIGURES,
 )
 
 

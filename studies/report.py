@@ -23,6 +23,7 @@ from pilegroup.studies.rundata import (
     layer_series,
     load_run,
     pile_loads_last,
+    select,
     zero_note,
 )
 from pilegroup.studies.view3d import FILE as VIEW3D
@@ -180,6 +181,39 @@ def _loads_section(run: RunData) -> list[str]:
                         "total load on the pile foundation 10856 kN).", ""]
 
 
+def _fmt(x: float, spec: str) -> str:
+    return "-" if not np.isfinite(x) else format(x, spec)
+
+
+def _gauges_section(run: RunData) -> list[str]:
+    """The field method's error per gauge section of the centre pile at the last output time."""
+    g = run.gauges
+    if g is None:
+        return []
+    t = float(g["time_day"].max())
+    g = select(g, g["time_day"] == t)
+    g = select(g, np.argsort(g["section"]))
+    lines = [f"### Virtual strain gauges: the field method against the model, t = {t:g} day", "",
+             f"Centre pile {run.centre_pile}, `gauges.csv`. Field method = the paper's Eqs. 1-3 "
+             "on the model's section-mean strains (docs/model.md, \"Virtual strain gauges\"); "
+             "error = field minus model. Friction: mean over the interval from the section down "
+             "to the next one (none below the last section). Relative displacement: the field "
+             "method's pile-top settlement minus the pile's shortening, i.e. the pile's "
+             "settlement (model: column \"w pile\"), against the model's pile minus adjacent "
+             "soil displacement: what it misses is the settlement of the soil next to the pile.",
+             "", "| section | depth (m) | N field (kN) | N model (kN) | f field (kPa) "
+             "| f model (kPa) | f error (kPa) | w field (mm) | w pile (mm) | w model (mm) "
+             "| w error (mm) |", "| ---: " * 11 + "|"]
+    for r in range(len(g["section"])):
+        v = {k: float(a[r]) for k, a in g.items()}
+        lines.append(
+            f"| {int(v['section'])} | {v['depth_m']:g} | {v['N_kN']:.1f} | {v['N_model_kN']:.1f} "
+            f"| {_fmt(v['f_kPa'], '.3f')} | {_fmt(v['f_model_kPa'], '.3f')} "
+            f"| {_fmt(v['f_error_kPa'], '+.3f')} | {v['w_mm']:.3f} | {v['w_pile_mm']:.3f} "
+            f"| {v['w_model_mm']:.3f} | {v['w_error_mm']:+.3f} |")
+    return lines + [""]
+
+
 def results_markdown(out_dir: Path, figures_rel: str) -> str:
     """A Markdown section summarising the run in ``out_dir`` from its CSV and JSON files.
 
@@ -197,6 +231,7 @@ def results_markdown(out_dir: Path, figures_rel: str) -> str:
     lines += _friction_section(run)
     lines += _relative_section(run)
     lines += _loads_section(run)
+    lines += _gauges_section(run)
     figs = [(f, cap) for f, cap, needs, _ in FIGURES if run.has(needs)]
     if (run.out_dir / "plots" / VIEW3D).is_file():
         figs.append((VIEW3D, "3D view: settlement at the last output time"))

@@ -1,10 +1,11 @@
 """One run output folder, read and checked, for the figures and the Markdown summary.
 
 Files: the CSV files of :mod:`pilegroup.studies.tables` (settlement, pile profiles, layer
-history, pile loads), ``summary.json`` (may be partial; ``"complete": false`` when interrupted;
-``"centre_pile"``) and ``scenario.json``, if present, which names the load stages and the layers.
-The end of loading is the last ``settlement.csv`` time in a load stage (without scenario.json: a
-stage whose name contains "load"; without any: the first output time after 0).
+history, pile loads, load-settlement curve, gauges), ``summary.json`` (may be partial;
+``"complete": false`` when interrupted; ``"centre_pile"``) and ``scenario.json``, if present,
+which names the load stages and the layers. The end of loading is the last ``settlement.csv``
+time in a load stage (without scenario.json: a stage whose name contains "load"; without any:
+the first output time after 0).
 
 Any file may be missing (its table is ``None``, logged).
 """
@@ -21,6 +22,7 @@ import numpy as np
 
 from pilegroup.model import ScenarioError
 from pilegroup.studies.tables import (
+    GAUGES_CSV,
     LAYER_HISTORY_CSV,
     LOAD_SETTLEMENT_CSV,
     LOADS_CSV,
@@ -33,7 +35,8 @@ from pilegroup.studies.tables import (
 log = logging.getLogger(__name__)
 
 #: The CSV files a run folder is read from, in this order.
-RUN_FILES = (SETTLEMENT_CSV, PROFILES_CSV, LAYER_HISTORY_CSV, LOADS_CSV, LOAD_SETTLEMENT_CSV)
+RUN_FILES = (SETTLEMENT_CSV, PROFILES_CSV, LAYER_HISTORY_CSV, LOADS_CSV, LOAD_SETTLEMENT_CSV,
+             GAUGES_CSV)
 
 #: Default centre pile of a 3 x 3 group numbered row by row.
 DEFAULT_CENTRE_PILE = 5
@@ -69,6 +72,7 @@ class RunData:
     centre_pile: int
     t_load: float | None
     layer_names: dict[int, str]
+    gauges: Table | None = None
 
     @property
     def complete(self) -> bool | None:
@@ -121,7 +125,7 @@ def _read_tables(out_dir: Path) -> dict[str, Table | None]:
     for name, t in raw.items():
         if t is None:
             log.info("%s not found in %s", name, out_dir)
-        elif len(t["t_day"]) == 0:
+        elif len(next(iter(t.values()))) == 0:
             log.info("%s has no data rows", name)
             raw[name] = None
     return raw
@@ -130,7 +134,7 @@ def _read_tables(out_dir: Path) -> dict[str, Table | None]:
 def _centre_only(name: str, t: Table | None, centre: int) -> Table | None:
     """The rows of pile ``centre`` in table ``t`` of file ``name`` (``None`` if none)."""
     sel = None if t is None else select(t, t["pile"] == centre)
-    if sel is not None and len(sel["t_day"]) == 0:
+    if sel is not None and len(sel["pile"]) == 0:
         log.info("%s has no rows for the centre pile %d", name, centre)
         sel = None
     return sel
@@ -157,7 +161,8 @@ def load_run(out_dir: Path) -> RunData:
                                                       strict=True)})
     return RunData(out_dir, raw[SETTLEMENT_CSV], profiles, history, raw[LOADS_CSV],
                    raw[LOAD_SETTLEMENT_CSV], summary, centre,
-                   _end_of_loading(raw[SETTLEMENT_CSV], scenario), names)
+                   _end_of_loading(raw[SETTLEMENT_CSV], scenario), names,
+                   _centre_only(GAUGES_CSV, raw[GAUGES_CSV], centre))
 
 
 def layer_series(run: RunData, column: str) -> dict[int, tuple[np.ndarray, np.ndarray]]:

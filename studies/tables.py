@@ -16,7 +16,16 @@ positive down; forces kN; stresses kPa; displacements m.
   times;
 * ``pile_loads.csv``: ``t_day,pile,x_m,y_m,head_force_kN``;
 * ``load_settlement.csv``: ``t_day,stage,load_factor,load_kN,settlement_m`` (every accepted
-  step: the load–settlement curve, also of a run that found no equilibrium beyond some load).
+  step: the load–settlement curve, also of a run that found no equilibrium beyond some load);
+* ``gauges.csv``: ``time_day,pile,section,depth_m,strain,N_kN,f_kPa,w_mm`` (the virtual strain
+  gauges reduced by the paper's field method, :mod:`pilegroup.studies.gauges`: section-mean
+  axial strain, compression positive; axial force; friction of the interval from the section
+  down to the next one, NaN at the last section; relative displacement, mm), then the model's
+  own values at the same sections ``N_model_kN,f_model_kPa,w_model_mm`` (axial force from the
+  pile stress, interface shear averaged over the same interval, pile minus adjacent soil
+  displacement), ``w_pile_mm`` (the model's pile settlement there) and the errors of the field
+  method, field minus model: ``N_error_kN,f_error_kPa,w_error_mm``; every pile, every output
+  time.
 """
 
 from __future__ import annotations
@@ -34,6 +43,7 @@ LAYER_HISTORY_CSV = "layer_history.csv"
 INTERFACE_LAYERS_CSV = "interface_layers.csv"
 LOADS_CSV = "pile_loads.csv"
 LOAD_SETTLEMENT_CSV = "load_settlement.csv"
+GAUGES_CSV = "gauges.csv"
 
 _LAYER_MEANS = ("t_day", "pile", "layer", "layer_name", "depth_top_m", "depth_bottom_m",
                 "shaft_friction_kPa", "relative_displacement_m", "viscoplastic_slip_m",
@@ -48,6 +58,9 @@ COLUMNS: dict[str, tuple[str, ...]] = {
     INTERFACE_LAYERS_CSV: _LAYER_MEANS,
     LOADS_CSV: ("t_day", "pile", "x_m", "y_m", "head_force_kN"),
     LOAD_SETTLEMENT_CSV: ("t_day", "stage", "load_factor", "load_kN", "settlement_m"),
+    GAUGES_CSV: ("time_day", "pile", "section", "depth_m", "strain", "N_kN", "f_kPa", "w_mm",
+                 "N_model_kN", "f_model_kPa", "w_model_mm", "w_pile_mm", "N_error_kN",
+                 "f_error_kPa", "w_error_mm"),
 }
 #: The columns that hold text; all others hold numbers.
 TEXT_COLUMNS = frozenset({"stage", "layer_name"})
@@ -58,6 +71,9 @@ PROFILE_COLUMNS = ",".join(COLUMNS[PROFILES_CSV])
 LAYER_COLUMNS = ",".join(_LAYER_MEANS)
 LOAD_COLUMNS = ",".join(COLUMNS[LOADS_CSV])
 LOAD_SETTLEMENT_COLUMNS = ",".join(COLUMNS[LOAD_SETTLEMENT_CSV])
+GAUGE_COLUMNS = ",".join(COLUMNS[GAUGES_CSV])
+#: The value columns of ``gauges.csv`` (after time, pile, section and depth).
+GAUGE_VALUES = COLUMNS[GAUGES_CSV][4:]
 
 #: A CSV file read by :func:`read_csv`: column name -> values (float, or str for text columns).
 Table = dict[str, np.ndarray]

@@ -20,6 +20,18 @@ T_LOAD = 1.0
 F0 = {1: 5.0, 2: 8.0, 3: 12.0, 4: 30.0}  # kPa at the end of loading
 W_END = {1: 0.012, 2: 0.010, 3: 0.006, 4: 0.002}  # m, scale of the relative displacement
 CENTRE = 5
+GAUGE_DEPTHS = [0.5, 10.0, 20.0, 30.0]
+
+
+def gauge_row(t: float, pile: int, s: int, z: float) -> list[object]:
+    """gauges.csv row: field minus model = +2 kN, +0.5 kPa and w/2 (model w = field w / 2)."""
+    on = 1.0 if t > 0 else 0.0
+    N, f, w = on * (1400.0 - 10.0 * z), on * (10.0 + z / 10.0), on * (12.0 - z / 10.0)
+    last = s == len(GAUGE_DEPTHS)
+    fm = float("nan") if last else f - 0.5 * on
+    f = float("nan") if last else f
+    return [t, pile, s, z, N / 1.5e7, N, f, w, N - 2.0 * on, fm, w / 2, w, 2.0 * on, f - fm,
+            w / 2]
 
 
 def settlement(t: float) -> float:
@@ -78,6 +90,10 @@ def make_run(out: Path, slopes: dict[int, float] | None = None, shape: str = "ea
         rows = [[t, stage.get(t, "consolidation"), min(t, 1.0), 10856.0 * min(t, 1.0),
                  f"{settlement(t):.9g}"] for t in OUTPUT_DAYS]
         write_csv(out / "load_settlement.csv", list(COLUMNS["load_settlement.csv"]), rows)
+    if "gauges.csv" in files:
+        rows = [gauge_row(t, pile, s, z) for t in OUTPUT_DAYS for pile in (1, CENTRE)
+                for s, z in enumerate(GAUGE_DEPTHS, start=1)]
+        write_csv(out / "gauges.csv", list(COLUMNS["gauges.csv"]), rows)
     (out / "summary.json").write_text(json.dumps({"scenario": "synthetic", "complete": complete,
                                                   "centre_pile": CENTRE}))
     return out
@@ -112,6 +128,19 @@ def test_settlement_table_and_paper_value(tmp_path):
     assert "End of loading: t = 1 day" in md and "run status: complete" in md
     for f, *_ in FIGURES:
         assert f"](plots/{f})" in md
+
+
+def test_gauge_error_table_at_the_last_output_time(tmp_path):
+    md = results_markdown(make_run(tmp_path / "run"), "plots")
+    sec = section(md, "Virtual strain gauges")
+    assert sec.startswith(": the field method against the model, t = 317 day")
+    assert f"Centre pile {CENTRE}" in sec
+    # z = 20 m: N = 1200 (model 1198), f = 12 (model 11.5), w = 10 mm (model 5 mm)
+    assert ("| 3 | 20 | 1200.0 | 1198.0 | 12.000 | 11.500 | +0.500 | 10.000 | 10.000 | 5.000 "
+            "| +5.000 |") in sec
+    # no interval below the last section
+    assert "| 4 | 30 | 1100.0 | 1098.0 | - | - | - | 9.000 | 9.000 | 4.500 | +4.500 |" in sec
+    assert sec.count("\n| ") == 2 + len(GAUGE_DEPTHS)  # header, rule, one row per section
 
 
 def test_answers_yes_for_growing_friction_and_early_relative_displacement(tmp_path):
