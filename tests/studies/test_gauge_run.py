@@ -114,3 +114,29 @@ def test_mpirun_two_ranks_give_the_serial_gauges(small_pile_run, run_cli, tmp_pa
         scale = float(np.nanmax(np.abs(ref[c]))) or 1.0
         np.testing.assert_allclose(got[c], ref[c], rtol=1e-8, atol=1e-12 * scale,
                                    equal_nan=True, err_msg=c)
+
+
+def test_every_pile_of_a_reduced_model_is_reported(small_pile_source, tmp_path):
+    """Two piles 2.4 m apart, 1000 kN: run as a quarter (each pile cut in half by y = 0, pile 1
+    the mirror image of pile 2). Both piles get the same rows, and each top section carries
+    half the load (2 % as in the single-pile test)."""
+    from pilegroup.model import load_scenario
+    from pilegroup.studies.run import run_scenario
+
+    text = small_pile_source.replace("grid = [1, 1]", "grid = [2, 1]\nspacing_m = [2.4, 2.4]")
+    text = text.replace("cap_load_kN = 500.0", "cap_load_kN = 1000.0")
+    text = text.replace("[outputs]\n", "[outputs]\nxdmf = false\nplots = false\n")
+    assert "plots = false" in text
+    f = tmp_path / "two_piles.toml"
+    f.write_text(text)
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("PILEGROUP_MESH_CACHE", str(tmp_path / "cache"))
+        summary = run_scenario(load_scenario(f), tmp_path / "run")
+    assert summary["solver"]["symmetry"]["model"] == "quarter"
+    g = _gauges(tmp_path / "run")
+    one, two = g["pile"] == 1, g["pile"] == 2
+    assert one.sum() == two.sum() == 12
+    for c in COLUMNS[GAUGES_CSV][2:]:
+        np.testing.assert_array_equal(g[c][one], g[c][two], err_msg=c)
+    top = (g["section"] == 1) & (g["time_day"] > 0)
+    assert g["N_kN"][top] == pytest.approx(np.full(4, LOAD_KN), rel=0.02)
