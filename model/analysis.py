@@ -13,6 +13,7 @@ from typing import Literal
 from pilegroup.errors import ScenarioError
 from pilegroup.model.bounds import check_bound
 from pilegroup.validate import (
+    is_finite_number,
     require_in_range,
     require_non_negative,
     require_one_of,
@@ -250,12 +251,22 @@ class Numerics:
 
 @dataclass(frozen=True)
 class Outputs:
-    """What to write. ``gauge_depths_m``: depths below ground of the pile gauge sections."""
+    """What to write. ``gauge_depths_m``: depths below ground of the pile gauge sections.
+
+    ``checkpoint_every_min``: a checkpoint every this many minutes of wall time as well, at
+    the next step boundary (0: only at the output times and on SIGTERM/SIGINT).
+    """
 
     xdmf: bool = True
     plots: bool = True
     gauge_depths_m: tuple[float, ...] = ()
+    checkpoint_every_min: float = 0.0
 
     def __post_init__(self) -> None:
         for i, z in enumerate(self.gauge_depths_m):
             require_non_negative(f"gauge_depths_m[{i}]", z, "m")
+        if not (is_finite_number(self.checkpoint_every_min)
+                and self.checkpoint_every_min >= 0.0):
+            raise ScenarioError("checkpoint_every_min", self.checkpoint_every_min,
+                                "must be > 0 (minutes of wall time between checkpoints) or 0 "
+                                "(off)", "min")
