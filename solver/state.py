@@ -90,7 +90,7 @@ def partition_fingerprint(pb: BiotProblem) -> str:
     """
     h = hashlib.sha256()
     msh = pb.mesh
-    for a in (msh.geometry.x, msh.geometry.dofmap):
+    for a in (msh.geometry.x, *msh.geometry.dofmaps):
         h.update(np.ascontiguousarray(a).tobytes())
     for f in pb.layout.fields:
         imap = f.function_space.dofmap.index_map
