@@ -16,6 +16,11 @@ Stages (docs/model.md):
 * ``load``: load factor ramped linearly to the stage's value; ``duration = 0`` is one
   instantaneous undrained step.
 * ``consolidation``: constant load to the stage end.
+
+A run can be resumed: :class:`RunState` is where the stage loop is (stage, t, load factor) and
+what the stepper remembers (``dt``, ``easy``, the run log); :func:`run_stages` starts from a
+given one and calls a ``boundary`` hook at every step boundary, where a checkpoint can be
+saved or the run stopped (docs/checkpoint.md).
 """
 
 from __future__ import annotations

@@ -39,14 +39,13 @@ from mpi4py import MPI
 from pilegroup.errors import RunInterrupted, ScenarioError
 from pilegroup.fileio import atomic_path, json_default, write_json_atomic
 from pilegroup.model import Scenario
-from pilegroup.solver import BiotProblem, RunLog, StepRecord
+from pilegroup.solver import BiotProblem, RunLog, RunState, StepRecord
 from pilegroup.solver.state import (
     check_same_partition,
     partition_fingerprint,
     problem_state,
     restore_problem_state,
 )
-from pilegroup.solver.stepping import RunState
 from pilegroup.studies import interrupt
 
 log = logging.getLogger(__name__)

@@ -10,7 +10,7 @@ from typing import Any
 
 from mpi4py import MPI
 
-from pilegroup.errors import PilegroupError, RunInterrupted
+from pilegroup.errors import PilegroupError, RunInterrupted, ScenarioError
 from pilegroup.fileio import write_json_atomic
 from pilegroup.geometry.adapter import geometry_spec
 from pilegroup.geometry.convert import build_mesh
@@ -45,6 +45,8 @@ def run_scenario(sc: Scenario, out: Path, mesh_size: float | None = None,
     if mesh_size is not None:
         sc = dataclasses.replace(sc, numerics=dataclasses.replace(
             sc.numerics, mesh=dataclasses.replace(sc.numerics.mesh, size_m=mesh_size)))
+    if resume and stop_after != "solve":
+        raise ScenarioError("--stop-after", stop_after, "only 'solve' with --resume")
     manifest = check_resume(out, sc, comm) if resume else None
     if manifest is not None:
         done = completed_summary(out, comm)
