@@ -18,6 +18,8 @@ from __future__ import annotations
 
 import json
 import os
+import signal
+import threading
 import time
 from pathlib import Path
 from types import ModuleType
@@ -57,6 +59,21 @@ def _cache_key(spec: GeometrySpec) -> str:
     return spec.cache_key(f"{BUILDER_VERSION}|gmsh {gmsh.__version__}")
 
 
+def _restore_python_signal_handlers() -> None:
+    """Re-arm Python's SIGTERM/SIGINT handlers, which gmsh's library replaces at the C level.
+
+    ``gmshInitialize``/``gmshFinalize`` set their own (or the default) actions; Python's
+    record (``signal.getsignal``) is unchanged, so setting it again restores the handler a run
+    installed (e.g. a stop request: :mod:`pilegroup.studies.interrupt`).
+    """
+    if threading.current_thread() is not threading.main_thread():
+        return
+    for s in (signal.SIGTERM, signal.SIGINT):
+        handler = signal.getsignal(s)
+        if handler is not None:
+            signal.signal(s, handler)
+
+
 class gmsh_session:  # noqa: N801 - used like a function: ``with gmsh_session(): ...``
     """Context manager: initialise gmsh if needed (quiet, no signal handler), finalise after."""
 
@@ -64,12 +81,14 @@ class gmsh_session:  # noqa: N801 - used like a function: ``with gmsh_session():
         self.owner = not gmsh.isInitialized()
         if self.owner:
             gmsh.initialize(readConfigFiles=False, interruptible=False)
+            _restore_python_signal_handlers()
         gmsh.option.setNumber("General.Terminal", 0)
         return gmsh
 
     def __exit__(self, *exc: object) -> None:
         if self.owner and gmsh.isInitialized():
             gmsh.finalize()
+            _restore_python_signal_handlers()
 
 
 def _build_and_write(spec: GeometrySpec, msh: Path | None) -> dict[str, Any]:

@@ -13,6 +13,7 @@ from typing import Literal
 from pilegroup.errors import ScenarioError
 from pilegroup.model.bounds import check_bound
 from pilegroup.validate import (
+    is_finite_number,
     require_in_range,
     require_non_negative,
     require_one_of,
@@ -254,11 +255,15 @@ class Outputs:
 
     ``gauge_depths_m``: depths below ground of the pile gauge sections, top down (strictly
     increasing).
+
+    ``checkpoint_every_min``: a checkpoint every this many minutes of wall time as well, at
+    the next step boundary (0: only at the output times and on SIGTERM/SIGINT).
     """
 
     xdmf: bool = True
     plots: bool = True
     gauge_depths_m: tuple[float, ...] = ()
+    checkpoint_every_min: float = 0.0
 
     def __post_init__(self) -> None:
         for i, z in enumerate(self.gauge_depths_m):
@@ -268,3 +273,8 @@ class Outputs:
                                     f"must be greater than gauge_depths_m[{i - 1}] = "
                                     f"{self.gauge_depths_m[i - 1]:g} (sections are listed top "
                                     "down, each below the one before)", "m")
+        if not (is_finite_number(self.checkpoint_every_min)
+                and self.checkpoint_every_min >= 0.0):
+            raise ScenarioError("checkpoint_every_min", self.checkpoint_every_min,
+                                "must be > 0 (minutes of wall time between checkpoints) or 0 "
+                                "(off)", "min")

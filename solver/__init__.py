@@ -32,7 +32,7 @@ from pilegroup.solver.layout import eps_mandel
 from pilegroup.solver.linsolve import PRESETS, Preset, merged_options
 from pilegroup.solver.newton import StepInfo
 from pilegroup.solver.problem import BiotProblem
-from pilegroup.solver.stepping import AdaptiveStepper, RunLog, StepRecord, run_stages
+from pilegroup.solver.stepping import AdaptiveStepper, RunLog, RunState, StepRecord, run_stages
 
 __all__ = [
     "GAMMA_W",
@@ -51,6 +51,7 @@ __all__ = [
     "PressureBC",
     "RigidPlate",
     "RunLog",
+    "RunState",
     "SoilMaterial",
     "SolverError",
     "SolverInputError",

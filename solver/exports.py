@@ -19,18 +19,20 @@ from __future__ import annotations
 
 import resource
 import time
+import xml.etree.ElementTree as ET
 from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Protocol
 
 import basix.ufl
+import h5py
 import numpy as np
 from dolfinx import fem, io
 from dolfinx import mesh as dmesh
 from mpi4py import MPI
 
 from pilegroup.constitutive.base import mandel_to_tensor
-from pilegroup.fileio import write_json_atomic
+from pilegroup.fileio import atomic_path, write_json_atomic
 from pilegroup.geometry import groups
 from pilegroup.solver.qpstate import QuadratureState
 
@@ -54,7 +56,7 @@ class _MeshSeries:
 
     def __init__(self, comm: MPI.Comm, path: Path, mesh: dmesh.Mesh,
                  u: fem.Function | None = None, qp: QuadratureState | None = None,
-                 p: fem.Function | None = None) -> None:
+                 p: fem.Function | None = None, resume: bool = False) -> None:
         self.comm, self.path, self.u, self.qp, self.p = comm, path, u, qp, p
         cell = mesh.basix_cell()
         self.u1 = None
@@ -73,8 +75,9 @@ class _MeshSeries:
         for k, n in keys.items():
             name = {"stress": "effective_stress", "eps_p": "plastic_strain"}.get(k, k)
             self.cell_fields[k] = fem.Function(self.T0 if n == 6 else self.S0, name=name)
-        with io.XDMFFile(comm, str(path), "w") as f:
-            f.write_mesh(mesh)
+        if not resume:
+            with io.XDMFFile(comm, str(path), "w") as f:
+                f.write_mesh(mesh)
 
     def write(self, t: float) -> None:
         if self.u1 is not None:
@@ -108,9 +111,12 @@ class XDMFSeries:
     and cap displacement and stress (separate fields). ``<stem>_interface.xdmf``: interface
     fields on the pile-surface facets (see :meth:`NodalInterface.nodal_fields`).
     ``label`` names the XDMF grids (ParaView shows it), e.g. the part a reduced model holds.
+    ``resume``: continue the files of a run (they are not rewritten; :meth:`restore_state`
+    cuts them back to the output times of the checkpoint).
     """
 
-    def __init__(self, problem: BiotProblem, path: str | Path, label: str | None = None) -> None:
+    def __init__(self, problem: BiotProblem, path: str | Path, label: str | None = None,
+                 resume: bool = False) -> None:
         self.problem = problem
         self.path = Path(path)
         self.comm = problem.comm
@@ -126,13 +132,13 @@ class XDMFSeries:
         for i, b in enumerate(problem.bodies):
             path_b = self.path if i == 0 else self.path.with_name(f"{stem}_{b.name}.xdmf")
             p = problem.p if problem.p_mesh is b.mesh else None
-            self.series.append(_MeshSeries(self.comm, path_b, b.mesh, b.u, b.qp, p))
+            self.series.append(_MeshSeries(self.comm, path_b, b.mesh, b.u, b.qp, p, resume))
         if all(problem.p_mesh is not b.mesh for b in problem.bodies):
             self.series.append(_MeshSeries(self.comm, self.path.with_name(
-                f"{stem}_pressure.xdmf"), problem.p_mesh, p=problem.p))
+                f"{stem}_pressure.xdmf"), problem.p_mesh, p=problem.p, resume=resume))
         if problem.interface is not None:
             self.series.append(_InterfaceSeries(problem, self.path.with_name(
-                f"{stem}_interface.xdmf")))
+                f"{stem}_interface.xdmf"), resume))
         self.times: list[float] = []
 
     def write(self, t: float, stage: str = "") -> None:
@@ -144,11 +150,54 @@ class XDMFSeries:
     def close(self) -> None:
         """Nothing stays open between writes; kept for the writer protocol."""
 
+    def saved_state(self) -> dict[str, Any]:
+        """What a checkpoint keeps: the output times written."""
+        return {"times": list(self.times)}
+
+    def restore_state(self, data: dict[str, Any]) -> None:
+        """Continue after the checkpoint's output times: later times are cut from the files.
+
+        A run killed after writing an output time but before its checkpoint has that time in
+        the files already; it is removed (XDMF grids and HDF5 datasets), and written again.
+        """
+        self.times = [float(t) for t in data["times"]]
+        if self.comm.rank == 0:
+            for s in self.series:
+                trim_xdmf(s.path, len(self.times))
+        self.comm.barrier()
+
+
+def trim_xdmf(path: Path, n: int) -> None:
+    """Keep the first ``n`` times of every time series in the XDMF file ``path`` (and .h5).
+
+    The HDF5 datasets of the removed times are deleted (unless a kept time uses them).
+    """
+    ET.register_namespace("xi", "https://www.w3.org/2001/XInclude")
+    tree = ET.parse(path)
+    removed, kept = set(), set()
+    for coll in tree.getroot().iter("Grid"):
+        if coll.get("CollectionType") != "Temporal":
+            continue
+        for i, grid in enumerate(list(coll.findall("Grid"))):
+            items = {d.text.strip().split(":", 1)[1] for d in grid.iter("DataItem")
+                     if d.get("Format") == "HDF" and d.text}
+            (kept if i < n else removed).update(items)
+            if i >= n:
+                coll.remove(grid)
+    if not removed:
+        return
+    with atomic_path(path) as tmp:
+        tree.write(tmp, xml_declaration=True, encoding="utf-8")
+    with h5py.File(path.with_suffix(".h5"), "a") as f:
+        for name in sorted(removed - kept):
+            if name in f:
+                del f[name]
+
 
 class _InterfaceSeries:
     """Interface fields on a facet mesh of the pile surfaces (nodal values, Q1)."""
 
-    def __init__(self, problem: BiotProblem, path: Path) -> None:
+    def __init__(self, problem: BiotProblem, path: Path, resume: bool = False) -> None:
         itf = problem.interface
         soil = problem.body("soil")
         md = problem.md
@@ -167,8 +216,9 @@ class _InterfaceSeries:
             shape = (k,) if k > 1 else ()
             W = fem.functionspace(fmesh, ("Lagrange", 1, shape))
             self.fields[key] = fem.Function(W, name=key)
-        with io.XDMFFile(self.comm, str(path), "w") as f:
-            f.write_mesh(fmesh)
+        if not resume:
+            with io.XDMFFile(self.comm, str(path), "w") as f:
+                f.write_mesh(fmesh)
 
     def write(self, t: float) -> None:
         vals = self.itf.nodal_fields()

@@ -320,6 +320,34 @@ class NodalInterface:
         for g in self.groups:
             g["trial"] = g["state"]
 
+    def saved_state(self) -> dict[str, np.ndarray]:
+        """The committed state as arrays (checkpoint): each group's law state and the jump.
+
+        Names: ``<group>/<key>`` for the law states, ``jump`` for the committed jump; the
+        arrays are this rank's points (nodes or Gauss points).
+        """
+        out = {f"{m}/{k}": v for m, g in enumerate(self.groups) if g["state"] is not None
+               for k, v in g["state"].items()}
+        out["jump"] = self._jump_committed.copy()
+        return out
+
+    def restore_state(self, arrays: dict[str, np.ndarray]) -> None:
+        """Set the committed state from :meth:`saved_state`'s arrays (same mesh partition)."""
+        if arrays["jump"].shape != self._jump_committed.shape:
+            raise ValueError("saved interface jump does not fit this rank's interface nodes")
+        for m, g in enumerate(self.groups):
+            if g["state"] is None:
+                continue
+            n = next(iter(g["state"].values())).shape[0]
+            state = {k.split("/", 1)[1]: np.array(a) for k, a in arrays.items()
+                     if k.split("/", 1)[0] == str(m)}
+            if set(state) != set(g["state"]) or any(a.shape[0] != n for a in state.values()):
+                raise ValueError(f"saved state of interface group {m} does not fit its {n} "
+                                 "points on this rank")
+            g["state"] = g["trial"] = state
+        self._jump_committed[:] = arrays["jump"]
+        self.jump.x.array[:] = arrays["jump"]
+
     # ---------- output ----------
     FIELDS = {"normal_traction": 1, "shear_traction_vertical": 1,
               "shear_traction_circumferential": 1, "opening": 1, "slip_vertical": 1,

@@ -265,6 +265,16 @@ class LinearSolver:
         self._use(fallback, None)
         return True
 
+    def restore(self, preset: str, fallbacks: list[str], refactorisations: int) -> None:
+        """Continue a saved run: its preset (after a fallback), notes and factorisation count.
+
+        A kept factorisation is not saved: the next solve factors the current matrix anew.
+        """
+        if preset != self.preset:
+            self._use(preset, None)
+        self.fallbacks = list(fallbacks)
+        self.refactorisations = int(refactorisations)
+
     def _solve(self, rhs: PETSc.Vec, sol: PETSc.Vec, undrained: bool) -> int:
         limit = self.spec.reuse_factor_its
         if limit and self._reusing and self._factor_undrained != undrained:

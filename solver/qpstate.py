@@ -10,6 +10,7 @@ the committed one (the trial is simply discarded).
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
@@ -131,6 +132,26 @@ class QuadratureState:
         for g in self.groups:
             g.state_trial = None
             self._write(g, g.state_n["stress"], None)
+
+    def saved_state(self) -> dict[str, np.ndarray]:
+        """The committed law state of every group as arrays named ``group/key`` (checkpoint)."""
+        return {f"{g.name}/{k}": v for g in self.groups for k, v in g.state_n.items()}
+
+    def restore_state(self, arrays: Mapping[str, np.ndarray]) -> None:
+        """Set the committed state of every group from :meth:`saved_state`'s arrays.
+
+        The arrays are this rank's points, so they fit the same mesh partition only; a group
+        whose point count differs raises ``ValueError``.
+        """
+        for g in self.groups:
+            state = {name.rsplit("/", 1)[1]: np.array(a) for name, a in arrays.items()
+                     if name.rsplit("/", 1)[0] == g.name}
+            if any(a.shape[0] != g.n for a in state.values()) or "stress" not in state:
+                raise ValueError(f"saved state of material group {g.name!r} does not fit its "
+                                 f"{g.n} points on this rank")
+            g.state_n, g.state_trial = state, None
+            self._write(g, state["stress"], None)
+        self.stress.x.scatter_forward()
 
     def cell_average(self, key: str) -> dict[str, tuple[np.ndarray, np.ndarray]]:
         """Cell averages of state ``key`` per group: ``name -> (cells, (n_cells, k))``."""

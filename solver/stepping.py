@@ -16,6 +16,11 @@ Stages (docs/model.md):
 * ``load``: load factor ramped linearly to the stage's value; ``duration = 0`` is one
   instantaneous undrained step.
 * ``consolidation``: constant load to the stage end.
+
+A run can be resumed: :class:`RunState` is where the stage loop is (stage, t, load factor) and
+what the stepper remembers (``dt``, ``easy``, the run log); :func:`run_stages` starts from a
+given one and calls a ``boundary`` hook at every step boundary, where a checkpoint can be
+saved or the run stopped (docs/checkpoint.md).
 """
 
 from __future__ import annotations
@@ -30,6 +35,7 @@ from pilegroup.solver.exports import Export
 from pilegroup.solver.inputs import Stage, TimeStepping
 
 if TYPE_CHECKING:
+    from pilegroup.solver.newton import StepInfo
     from pilegroup.solver.problem import BiotProblem
 
 
@@ -68,7 +74,9 @@ class AdaptiveStepper:
     """Adaptive stepper over a problem with ``solve_step/commit/rollback``.
 
     Before giving up below ``dt_min`` it asks ``problem.fall_back_linear_solver(message)``
-    whether a fallback linear solver can retry the step.
+    whether a fallback linear solver can retry the step. Its memory between steps is ``dt``
+    (the next step size) and ``easy`` (easy steps in a row at that size); a resumed run sets
+    both from its checkpoint.
 
     Args:
         ts: step-size rules.
@@ -79,7 +87,7 @@ class AdaptiveStepper:
         self.ts = ts
         self.dt = ts.dt0
         self.log = log or RunLog()
-        self._easy = 0
+        self.easy = 0
 
     def advance(
         self,
@@ -91,18 +99,22 @@ class AdaptiveStepper:
         milestones: Sequence[float] = (),
         on_milestone: Callback | None = None,
         on_step: Callback | None = None,
+        on_boundary: Callable[[float, bool], None] | None = None,
     ) -> float:
         """Advance from ``t0`` to ``t1`` (day); returns ``t1``.
 
         ``load_factor(t)`` gives the load factor at time ``t``; ``on_milestone(problem, t,
         stage)`` is called after the accepted step that lands on each milestone in
         ``(t0, t1]`` (``t1`` included); ``on_step(problem, t, stage)`` after every accepted step
-        (e.g. a progress bar).
+        (e.g. a progress bar); ``on_boundary(t, output)`` at every step boundary, after the
+        step was accepted (and its milestone written: ``output`` true) or rejected: the safe
+        points where a run may save a checkpoint or stop.
         """
         ts = self.ts
         marks = sorted({float(m) for m in (*milestones, *ts.milestones) if t0 < m < t1} | {t1})
         t = t0
         for m in marks:
+            landed = False
             while t < m:
                 dt = min(self.dt, ts.dt_max)
                 landing = t + dt * (1.0 + 1e-9) >= m or (m - t - dt) < 1e-3 * dt
@@ -111,18 +123,9 @@ class AdaptiveStepper:
                 t_new = m if landing else t + dt
                 info = problem.solve_step(dt, load_factor(t_new))
                 if not info.converged:
-                    problem.rollback()
-                    self.log.rejected += 1
-                    self.dt = dt * ts.cut
-                    self._easy = 0
-                    if self.dt < ts.dt_min and problem.fall_back_linear_solver(info.message):
-                        self.dt = dt  # the same step again with the fallback linear solver
-                        continue
-                    if self.dt < ts.dt_min:
-                        raise StepFailure(
-                            f"stage {stage!r}: step at t = {t:.6g} day failed with dt = "
-                            f"{dt:.3g} day (< dt_min after cut): {info.message}",
-                            t, load_factor(t), stage)
+                    self._reject(problem, info, t, dt, load_factor, stage)
+                    if on_boundary is not None:
+                        on_boundary(t, False)
                     continue
                 problem.commit()
                 self.log.steps.append(StepRecord(stage, t_new, dt, load_factor(t_new),
@@ -131,18 +134,45 @@ class AdaptiveStepper:
                 if on_step is not None:
                     on_step(problem, t, stage)
                 if landing:
-                    continue
-                self.dt = dt
-                if info.newton_its <= ts.easy_newton:
-                    self._easy += 1
-                    if self._easy >= ts.hold:
-                        self.dt = min(dt * ts.grow, ts.dt_max)
-                        self._easy = 0
+                    landed = True
+                    if on_milestone is not None:
+                        on_milestone(problem, t, stage)
                 else:
-                    self._easy = 0
-            if on_milestone is not None:
+                    self._grow(dt, info.newton_its)
+                if on_boundary is not None:
+                    on_boundary(t, landing)
+            if not landed and on_milestone is not None:  # a mark at t0 (zero duration)
                 on_milestone(problem, t, stage)
         return t
+
+    def _reject(self, problem: BiotProblem, info: StepInfo, t: float, dt: float,
+                load_factor: Callable[[float], float], stage: str) -> None:
+        """Roll a failed step back and cut ``dt`` (or hand over to a fallback linear solver)."""
+        ts = self.ts
+        problem.rollback()
+        self.log.rejected += 1
+        self.dt = dt * ts.cut
+        self.easy = 0
+        if self.dt < ts.dt_min and problem.fall_back_linear_solver(info.message):
+            self.dt = dt  # the same step again with the fallback linear solver
+            return
+        if self.dt < ts.dt_min:
+            raise StepFailure(
+                f"stage {stage!r}: step at t = {t:.6g} day failed with dt = "
+                f"{dt:.3g} day (< dt_min after cut): {info.message}",
+                t, load_factor(t), stage)
+
+    def _grow(self, dt: float, newton_its: int) -> None:
+        """After an accepted (non-landing) step of size ``dt``: keep it, or grow it."""
+        ts = self.ts
+        self.dt = dt
+        if newton_its <= ts.easy_newton:
+            self.easy += 1
+            if self.easy >= ts.hold:
+                self.dt = min(dt * ts.grow, ts.dt_max)
+                self.easy = 0
+        else:
+            self.easy = 0
 
 
 def first_dt(stages: Sequence[Stage], ts: TimeStepping) -> float:
@@ -156,6 +186,32 @@ def first_dt(stages: Sequence[Stage], ts: TimeStepping) -> float:
     return 0.0
 
 
+@dataclass
+class RunState:
+    """Where the stage loop is and what the stepper remembers: what a checkpoint saves.
+
+    ``stage`` is the index of the stage in progress, ``started`` whether its set-up is done
+    (its ``dt0`` applied), ``done`` whether it is complete (its end reached and written);
+    ``t`` (day) and ``lam`` (load factor) are those of the last committed step; ``dt`` and
+    ``easy`` the stepper's memory (:class:`AdaptiveStepper`); ``log`` the run log so far.
+    A fresh run starts from ``RunState()``; a resumed run from the state of its checkpoint.
+    """
+
+    stage: int = 0
+    started: bool = False
+    done: bool = False
+    t: float = 0.0
+    lam: float = 0.0
+    dt: float | None = None
+    easy: int = 0
+    log: RunLog = field(default_factory=RunLog)
+
+
+#: ``boundary(problem, state, output)``: called at every step boundary (after an accepted or
+#: rejected step; ``output`` true when an output time was just written), collectively.
+Boundary = Callable[["BiotProblem", RunState, bool], None]
+
+
 def run_stages(
     problem: BiotProblem,
     stages: Sequence[Stage],
@@ -164,6 +220,8 @@ def run_stages(
     geostatic_tol: float = 1e-6,
     on_step: Callback | None = None,
     exports: Sequence[Export] = (),
+    state: RunState | None = None,
+    boundary: Boundary | None = None,
 ) -> RunLog:
     """Run the stages in order; returns the :class:`RunLog`.
 
@@ -175,6 +233,10 @@ def run_stages(
         geostatic_tol: largest displacement (m) accepted by the geostatic equilibrium check.
         on_step: called after every accepted time step (collective; e.g. a progress bar).
         exports: written at stage ends and milestone times; closed at the end of the run.
+        state: where to start (a checkpoint's, with the problem's state restored to it); a
+            fresh run by default. It is kept up to date during the run.
+        boundary: called at every step boundary with the current ``state`` (it may save a
+            checkpoint, or raise to stop the run there).
     """
 
     def milestone(pb: BiotProblem, t: float, stage: str) -> None:
@@ -184,66 +246,113 @@ def run_stages(
             on_milestone(pb, t, stage)
 
     try:
-        return _run(problem, stages, ts, milestone, geostatic_tol, on_step)
+        return _Run(problem, stages, ts, state or RunState(), boundary).run(
+            milestone, geostatic_tol, on_step)
     finally:
         for e in exports:
             e.close()
 
 
-def _run(problem: BiotProblem, stages: Sequence[Stage], ts: TimeStepping,
-         on_milestone: Callback, geostatic_tol: float, on_step: Callback | None) -> RunLog:
-    """The stage loop of :func:`run_stages`."""
-    log = RunLog()
-    stepper = AdaptiveStepper(ts, log)
-    t = 0.0
-    lam = 0.0
-    t_wall = time.perf_counter()
-    for i, st in enumerate(stages):
-        if st.kind == "geostatic":
-            problem.set_initial_stress(problem.geostatic_stress())
-            info = problem.solve_step(first_dt(stages[i + 1:], ts), lam)
-            if not info.converged:
-                raise SolverError(f"geostatic stage {st.name!r} did not converge: "
-                                  f"{info.message}")
-            problem.commit()
-            umax = problem.max_displacement()
-            log.geostatic_max_u = umax
-            if umax > geostatic_tol:
-                raise SolverError(
-                    f"geostatic stage {st.name!r}: max |u| = {umax:.3e} m > {geostatic_tol} m; "
-                    "the initial stress is not in equilibrium with the buoyant weight")
-            problem.reset_displacements()
-            log.steps.append(StepRecord(st.name, t, 0.0, lam, info.newton_its, info.ksp_its,
-                                        info.seconds))
-            on_milestone(problem, t, st.name)
-            continue
-        lam0, lam1, t0, t1 = lam, st.load_factor if st.kind == "load" else lam, t, t + st.duration
-        if st.kind == "load" and st.duration == 0.0:
-            info = problem.solve_step(0.0, lam1)
-            if not info.converged and problem.fall_back_linear_solver(info.message):
-                problem.rollback()
-                info = problem.solve_step(0.0, lam1)
-            if not info.converged:
-                problem.rollback()
-                raise StepFailure(f"instantaneous load stage {st.name!r} failed: {info.message}",
-                                  t, lam, st.name)
-            problem.commit()
-            log.steps.append(StepRecord(st.name, t, 0.0, lam1, info.newton_its, info.ksp_its,
-                                        info.seconds))
-            lam = lam1
-            on_milestone(problem, t, st.name)
-            continue
-        if st.dt0 is not None:
-            stepper.dt = st.dt0
+class _Run:
+    """The stage loop of :func:`run_stages`, resumable from a :class:`RunState`."""
 
-        def lam_of(tt: float, lam0: float = lam0, lam1: float = lam1, t0: float = t0,
-                   t1: float = t1) -> float:
+    def __init__(self, problem: BiotProblem, stages: Sequence[Stage], ts: TimeStepping,
+                 state: RunState, boundary: Boundary | None) -> None:
+        self.problem, self.stages, self.ts = problem, stages, ts
+        self.state, self.boundary = state, boundary
+        self.stepper = AdaptiveStepper(ts, state.log)
+        if state.dt is not None:
+            self.stepper.dt = state.dt
+        self.stepper.easy = state.easy
+
+    def at_boundary(self, t: float, lam: float, output: bool, done: bool = False) -> None:
+        """Record the committed state in ``state`` and call the boundary hook."""
+        s = self.state
+        s.t, s.lam, s.done = t, lam, done
+        s.dt, s.easy = self.stepper.dt, self.stepper.easy
+        if self.boundary is not None:
+            self.boundary(self.problem, s, output)
+
+    def run(self, on_milestone: Callback, geostatic_tol: float, on_step: Callback | None
+            ) -> RunLog:
+        """Every stage not yet complete, in order."""
+        s, log = self.state, self.state.log
+        t_wall = time.perf_counter() - log.wall_s
+        t = lam = 0.0  # the start of each stage, the same arithmetic in a resumed run
+        for i, st in enumerate(self.stages):
+            t1 = t + st.duration
+            lam1 = st.load_factor if st.kind == "load" else lam
+            if i < s.stage or (i == s.stage and s.done):
+                t, lam = t1, lam1
+                continue
+            resume = i == s.stage and s.started
+            s.stage, s.started, s.done = i, True, False
+            if st.kind == "geostatic":
+                self._geostatic(i, st, t, lam, geostatic_tol, on_milestone)
+            elif st.kind == "load" and st.duration == 0.0:
+                self._instantaneous(st, t, lam, lam1, on_milestone)
+            else:
+                if st.dt0 is not None and not resume:
+                    self.stepper.dt = st.dt0
+                self._advance(st, (t, t1, lam, lam1), s.t if resume else t, on_milestone,
+                              on_step)
+            t, lam = t1, lam1
+        log.wall_s = time.perf_counter() - t_wall
+        return log
+
+    def _geostatic(self, i: int, st: Stage, t: float, lam: float, tol: float,
+                   on_milestone: Callback) -> None:
+        """K0 stress, one equilibrium check step, displacements reset (see the module doc)."""
+        problem, log = self.problem, self.state.log
+        problem.set_initial_stress(problem.geostatic_stress())
+        info = problem.solve_step(first_dt(self.stages[i + 1:], self.ts), lam)
+        if not info.converged:
+            raise SolverError(f"geostatic stage {st.name!r} did not converge: {info.message}")
+        problem.commit()
+        umax = problem.max_displacement()
+        log.geostatic_max_u = umax
+        if umax > tol:
+            raise SolverError(
+                f"geostatic stage {st.name!r}: max |u| = {umax:.3e} m > {tol} m; "
+                "the initial stress is not in equilibrium with the buoyant weight")
+        problem.reset_displacements()
+        log.steps.append(StepRecord(st.name, t, 0.0, lam, info.newton_its, info.ksp_its,
+                                    info.seconds))
+        on_milestone(problem, t, st.name)
+        self.at_boundary(t, lam, True, done=True)
+
+    def _instantaneous(self, st: Stage, t: float, lam: float, lam1: float,
+                       on_milestone: Callback) -> None:
+        """One undrained step to the stage's load factor."""
+        problem = self.problem
+        info = problem.solve_step(0.0, lam1)
+        if not info.converged and problem.fall_back_linear_solver(info.message):
+            problem.rollback()
+            info = problem.solve_step(0.0, lam1)
+        if not info.converged:
+            problem.rollback()
+            raise StepFailure(f"instantaneous load stage {st.name!r} failed: {info.message}",
+                              t, lam, st.name)
+        problem.commit()
+        self.state.log.steps.append(StepRecord(st.name, t, 0.0, lam1, info.newton_its,
+                                               info.ksp_its, info.seconds))
+        on_milestone(problem, t, st.name)
+        self.at_boundary(t, lam1, True, done=True)
+
+    def _advance(self, st: Stage, span: tuple[float, float, float, float], t_from: float,
+                 on_milestone: Callback, on_step: Callback | None) -> None:
+        """A ramped load or a consolidation stage, from ``t_from`` to its end."""
+        t0, t1, lam0, lam1 = span
+
+        def lam_of(tt: float) -> float:
             if t1 <= t0:
                 return lam1
             return lam0 + (lam1 - lam0) * min(max((tt - t0) / (t1 - t0), 0.0), 1.0)
 
-        t = stepper.advance(problem, t0, t1, lam_of, st.name, on_milestone=on_milestone,
-                            on_step=on_step)
-        lam = lam1
-    log.wall_s = time.perf_counter() - t_wall
-    return log
+        def boundary(t: float, output: bool) -> None:
+            self.at_boundary(t, lam_of(t), output, done=output and t >= t1)
+
+        self.stepper.advance(self.problem, t_from, t1, lam_of, st.name,
+                             on_milestone=on_milestone, on_step=on_step, on_boundary=boundary)
+        if t1 <= t_from:  # nothing to step (zero duration): the stage end is reached as is
+            self.at_boundary(t1, lam1, True, done=True)

@@ -1,7 +1,8 @@
 """The ``pilegroup`` command line.
 
 Exit codes: 0 success, 1 a run failed (e.g. no convergence), 2 invalid input (a clear one-line
-message naming the key, the value and what is allowed; no traceback).
+message naming the key, the value and what is allowed; no traceback), 130/143 a run stopped by
+SIGINT/SIGTERM after saving a checkpoint (128 + the signal number).
 """
 
 from __future__ import annotations
@@ -10,11 +11,13 @@ import argparse
 import json
 import logging
 import os
+import shlex
 import sys
 import traceback
 from collections.abc import Sequence
 from pathlib import Path
 
+from pilegroup.errors import RunInterrupted
 from pilegroup.fileio import write_text_atomic
 from pilegroup.model import BUNDLED, PilegroupError, ScenarioError, bundled_text, load_scenario
 from pilegroup.model.loader import parse_override
@@ -107,11 +110,14 @@ def _scenario_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
+    from pilegroup.studies.interrupt import stop_on_signals
     from pilegroup.studies.run import run_scenario
 
     sc = load_scenario(args.scenario, _overrides(args))
     out = Path(args.out) if args.out else Path("out") / sc.name
-    summary = run_scenario(sc, out, mesh_size=args.mesh_size, stop_after=args.stop_after)
+    with stop_on_signals():  # SIGTERM/SIGINT: checkpoint at the next step boundary, then stop
+        summary = run_scenario(sc, out, mesh_size=args.mesh_size, stop_after=args.stop_after,
+                               resume=args.resume)
     if _world_rank() == 0:
         print(json.dumps(summary, indent=2))
     return 0
@@ -126,6 +132,9 @@ def _run_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--stop-after", choices=["mesh", "solve"], default="solve",
                    help="mesh: validate and mesh only (writes scenario.json, mesh/ and "
                    "summary.json); solve (default): run every stage")
+    p.add_argument("--resume", action="store_true",
+                   help="continue from the last checkpoint in --out (same scenario, --set "
+                   "values and rank count); a complete run is not run again")
     p.set_defaults(func=_cmd_run)
 
 
@@ -246,7 +255,7 @@ def build_parser() -> argparse.ArgumentParser:
         "interface (DOLFINx, gmsh, PETSc). Scenarios are TOML files whose keys carry their "
         "unit; bundled scenarios: " + ", ".join(BUNDLED) + ".",
         epilog="Under MPI: mpirun -n 2 pilegroup run pier667. Exit codes: 0 ok, 1 run failed, "
-        "2 invalid input.",
+        "2 invalid input, 143/130 stopped by SIGTERM/SIGINT (checkpoint saved; --resume).",
     )
     p.add_argument("-v", "--verbose", action="count", default=0, help="more log output")
     sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
@@ -272,11 +281,26 @@ def main(argv: Sequence[str] | None = None) -> int:
     except ScenarioError as exc:
         print(f"pilegroup: invalid input: {exc}", file=sys.stderr)
         return EXIT_INPUT
+    except RunInterrupted as exc:  # every rank alike; one line from rank 0
+        if _world_rank() == 0:
+            print(f"pilegroup: {exc}; resume with: {_resume_command(argv)}", file=sys.stderr,
+                  flush=True)
+        return 128 + exc.signum
     except PilegroupError as exc:
         print(f"pilegroup: failed: {exc}", file=sys.stderr)
         return EXIT_FAILED
     except Exception as exc:  # a failure that may be one rank's alone: end every rank
         return _abort(exc, args.verbose)
+
+
+def _resume_command(argv: Sequence[str] | None) -> str:
+    """The command line that resumes this run: ``[mpirun -n N] pilegroup ARGS --resume``."""
+    from mpi4py import MPI
+
+    args = list(sys.argv[1:] if argv is None else argv)
+    ranks = MPI.COMM_WORLD.size
+    mpi = ["mpirun", "-n", str(ranks)] if ranks > 1 else []
+    return shlex.join([*mpi, "pilegroup", *args] + ([] if "--resume" in args else ["--resume"]))
 
 
 def _abort(exc: Exception, verbose: bool) -> int:

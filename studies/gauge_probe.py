@@ -34,6 +34,7 @@ from __future__ import annotations
 import logging
 import math
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import ufl
@@ -189,10 +190,24 @@ class GaugeProbe:
         for p in range(1, self.n_piles + 1):
             vals = kept[self.piles.source[p]]
             cols = np.column_stack([vals[c] for c in GAUGE_VALUES]) + 0.0  # no "-0"
-            self.rows += [f"{t:.6g},{p},{s + 1},{z:.6g}," + ",".join(f"{x:.9g}" for x in row)
+            self.rows += [f"{t:.6g},{p},{s + 1},{z:.6g}," + ",".join(_cell(x) for x in row)
                           for s, (z, row) in enumerate(zip(self.depths, cols, strict=True))]
         if self.comm.rank == 0:
             write_text_atomic(self.path, "\n".join([GAUGE_COLUMNS, *self.rows]) + "\n")
 
     def close(self) -> None:
         """Nothing stays open (the file is rewritten atomically at each write)."""
+
+    def saved_state(self) -> dict[str, Any]:
+        """What a checkpoint keeps: the rows written and the reference axial forces."""
+        return {"rows": list(self.rows), "N0": {str(k): v.tolist() for k, v in self._N0.items()}}
+
+    def restore_state(self, data: dict[str, Any]) -> None:
+        """Continue from :meth:`saved_state` (the file is rewritten at the next write)."""
+        self.rows = list(data["rows"])
+        self._N0 = {int(k): np.array(v, dtype=float) for k, v in data["N0"].items()}
+
+
+def _cell(x: float) -> str:
+    """A CSV cell: the value, or empty where the quantity does not exist (no "nan" text)."""
+    return f"{x:.9g}" if np.isfinite(x) else ""

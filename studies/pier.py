@@ -47,6 +47,7 @@ from pilegroup.solver import (
     run_summary,
 )
 from pilegroup.solver.probes import facet_area
+from pilegroup.studies.checkpoint import Checkpoints
 from pilegroup.studies.gauge_probe import GaugeProbe
 from pilegroup.studies.piles import LoadSettlementCurve, PileProbe, SettlementSeries
 from pilegroup.studies.tables import GAUGES_CSV
@@ -205,7 +206,8 @@ def xdmf_label(symmetry: str) -> str | None:
 
 
 def run_coupled(sc: Scenario, md: MeshData, out: Path, preset: str | None = None,
-                mesh_size: float | None = None) -> dict[str, Any]:
+                mesh_size: float | None = None, resume: dict[str, Any] | None = None
+                ) -> dict[str, Any]:
     """Run every stage of ``sc`` on ``md`` with the scenario's exports; returns the summary.
 
     Exports, written at every output time: ``settlement.csv``, the pile tables
@@ -213,7 +215,10 @@ def run_coupled(sc: Scenario, md: MeshData, out: Path, preset: str | None = None
     ``outputs.gauge_depths_m``: :class:`~pilegroup.studies.gauge_probe.GaugeProbe`),
     ``results*.xdmf`` (when
     ``outputs.xdmf``) and ``summary_solver.json`` (``complete: false`` until the end, then the
-    full run summary).
+    full run summary). Checkpoints (:class:`~pilegroup.studies.checkpoint.Checkpoints`) at
+    every output time, every ``outputs.checkpoint_every_min`` and on a stop request (which
+    ends the run with :class:`~pilegroup.errors.RunInterrupted`). ``resume``: the manifest of
+    the checkpoint to continue from (:func:`~pilegroup.studies.checkpoint.check_resume`).
     """
     t0 = time.perf_counter()
     symmetry = resolve_symmetry(sc)
@@ -231,7 +236,8 @@ def run_coupled(sc: Scenario, md: MeshData, out: Path, preset: str | None = None
                 "settlement_m": [{"t_day": t, "stage": s, "settlement_m": w}
                                  for t, s, w in settlement.history],
                 "settlement_sign": "positive = downward (compression-positive habit)",
-                "wall_s": time.perf_counter() - t0}
+                "resumed_from_day": resume["t_day"] if resume is not None else None,
+                "checkpoints": ckpt.written, "wall_s": time.perf_counter() - t0}
 
     writer = SummaryWriter(out / "summary_solver.json", pb.comm, summary)
     curve = LoadSettlementCurve(pb, settlement.probe, sc.total_cap_load(),
@@ -240,8 +246,12 @@ def run_coupled(sc: Scenario, md: MeshData, out: Path, preset: str | None = None
     if gauges is not None:
         exports.append(gauges)
     if sc.outputs.xdmf:
-        exports.append(XDMFSeries(pb, out / "results.xdmf", xdmf_label(symmetry[0])))
+        exports.append(XDMFSeries(pb, out / "results.xdmf", xdmf_label(symmetry[0]),
+                                  resume=resume is not None))
     exports.append(writer)
+    stages = solver_stages(sc)
+    ckpt = Checkpoints(out, sc, pb, [st.name for st in stages], exports)
+    state = ckpt.restore(resume) if resume is not None else None
     bar = tqdm(total=sc.time.end_day, unit="day", desc=sc.name, disable=pb.comm.rank != 0,
                bar_format="{desc}: {n:.3g}/{total:g} day |{bar}| {elapsed}{postfix}")
 
@@ -252,8 +262,9 @@ def run_coupled(sc: Scenario, md: MeshData, out: Path, preset: str | None = None
         bar.set_postfix_str(f"{stage}, settlement {1000 * settlement.probe():.2f} mm")
 
     try:
-        run_log = run_stages(pb, solver_stages(sc), time_stepping(sc), on_step=on_step,
-                             geostatic_tol=GEOSTATIC_TOL_M, exports=exports)
+        run_log = run_stages(pb, stages, time_stepping(sc), on_step=on_step,
+                             geostatic_tol=GEOSTATIC_TOL_M, exports=exports, state=state,
+                             boundary=ckpt)
     except StepFailure as exc:
         load = exc.load_factor * sc.total_cap_load()
         raise StepFailure(f"no equilibrium beyond load factor {exc.load_factor:.4g} "

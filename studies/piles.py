@@ -33,6 +33,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import ufl
@@ -240,6 +241,19 @@ class PileProbe:
     def close(self) -> None:
         """Nothing stays open (every table is rewritten atomically at each write)."""
 
+    def saved_state(self) -> dict[str, Any]:
+        """What a checkpoint keeps: every table's rows, the geostatic forces, the last step."""
+        rows = {k: list(v) for k, v in vars(self).items() if k.endswith("_rows")}
+        return {"rows": rows, "N0": {str(k): v.tolist() for k, v in self._N0.items()},
+                "last_step_t": self._last_step_t}
+
+    def restore_state(self, data: dict[str, Any]) -> None:
+        """Continue from :meth:`saved_state` (the tables are rewritten at the next write)."""
+        for k, v in data["rows"].items():
+            setattr(self, k, list(v))
+        self._N0 = {int(k): np.array(v, dtype=float) for k, v in data["N0"].items()}
+        self._last_step_t = data["last_step_t"]
+
     def record_step(self, t: float) -> None:
         """Layer means of the centre pile after an accepted step (collective)."""
         if self._itf is None or t == self._last_step_t:
@@ -282,6 +296,14 @@ class SettlementSeries:
         self.comm = problem.comm
         self.history: list[tuple[float, str, float]] = []
 
+    def saved_state(self) -> dict[str, Any]:
+        """What a checkpoint keeps: the settlement history."""
+        return {"history": [list(h) for h in self.history]}
+
+    def restore_state(self, data: dict[str, Any]) -> None:
+        """Continue from :meth:`saved_state`."""
+        self.history = [(float(t), str(s), float(w)) for t, s, w in data["history"]]
+
     def write(self, t: float, stage: str) -> None:
         """Record the settlement at ``t`` and rewrite the file."""
         self.history.append((t, stage, self.probe()))
@@ -307,6 +329,14 @@ class LoadSettlementCurve:
         self.path = Path(path)
         self.rows: list[str] = []
         self._last_t: float | None = None
+
+    def saved_state(self) -> dict[str, Any]:
+        """What a checkpoint keeps: the rows and the time of the last one."""
+        return {"rows": list(self.rows), "last_t": self._last_t}
+
+    def restore_state(self, data: dict[str, Any]) -> None:
+        """Continue from :meth:`saved_state`."""
+        self.rows, self._last_t = list(data["rows"]), data["last_t"]
 
     def record(self, t: float, stage: str) -> None:
         """Add the current point (collective: the settlement is all-reduced)."""

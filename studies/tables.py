@@ -90,7 +90,8 @@ def read_csv(path: Path) -> Table | None:
 
     The file name selects the columns (:data:`COLUMNS`). Raises :class:`ScenarioError` for an
     empty file, a missing column, a short row or a non-numeric value, naming the file, the column
-    and the columns required.
+    and the columns required. An empty cell is a quantity that does not exist there (e.g. the
+    friction below the last gauge section): NaN in the array; no file holds the text "nan".
     """
     if not path.is_file():
         return None
@@ -116,7 +117,7 @@ def read_csv(path: Path) -> Table | None:
         vals = np.empty(len(body))
         for n, row in enumerate(body, start=2):
             try:
-                vals[n - 2] = float(row[i])
+                vals[n - 2] = float(row[i]) if row[i].strip() else np.nan
             except ValueError:
                 raise ScenarioError(f"{path} row {n}", row[i].strip(),
                                     f"column {c!r} must be a number") from None

@@ -6,7 +6,9 @@ Which class names which kind of failure:
   (the CLI exits with code 2);
 * :class:`ConstitutiveError`: a parameter or input of a constitutive law is invalid;
 * :class:`SolverError` and its subclasses: a solver input is invalid, or a run failed (the CLI
-  exits with code 1).
+  exits with code 1);
+* :class:`RunInterrupted`: a run stopped on SIGTERM or SIGINT after saving a checkpoint (the
+  CLI exits with code 128 + the signal number: 143 or 130).
 
 The input errors are also ``ValueError`` (``except ValueError`` catches them). An error about
 one value names the key, the value, its unit and what is allowed, in the form of
@@ -87,7 +89,22 @@ class StepFailure(SolverError):
         self.t, self.load_factor, self.stage = t, load_factor, stage
 
 
+class RunInterrupted(PilegroupError):
+    """A run stopped at a step boundary on a signal, with a checkpoint to resume from.
+
+    ``signal_name`` (e.g. ``"SIGTERM"``), ``signum``, ``t`` (day) and ``stage`` of the state
+    reached, ``checkpoint`` (the checkpoint folder).
+    """
+
+    def __init__(self, signum: int, signal_name: str, t: float, stage: str,
+                 checkpoint: str) -> None:
+        super().__init__(f"interrupted by {signal_name} at t = {t:.6g} day (stage {stage}); "
+                         f"checkpoint in {checkpoint}")
+        self.signum, self.signal_name = signum, signal_name
+        self.t, self.stage, self.checkpoint = t, stage, checkpoint
+
+
 __all__ = [
-    "ConstitutiveError", "ConvergenceError", "PilegroupError", "ScenarioError", "SolverError",
-    "SolverInputError", "StepFailure", "describe",
+    "ConstitutiveError", "ConvergenceError", "PilegroupError", "RunInterrupted",
+    "ScenarioError", "SolverError", "SolverInputError", "StepFailure", "describe",
 ]
