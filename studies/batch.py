@@ -39,7 +39,8 @@ import sys
 import threading
 import time
 import uuid
-from contextlib import nullcontext
+from collections.abc import Iterator
+from contextlib import contextmanager, nullcontext
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -129,7 +130,7 @@ class _Queue:
 
 
 def _agree(exc: Exception, group: MPI.Comm, err_comm: MPI.Comm, world: MPI.Comm,
-           rc: ResolvedCase, run_dir: Path) -> str:
+           rc: ResolvedCase, run_dir: Path, start: float) -> str:
     """The failure message every rank of the group agrees on; aborts if this rank is alone."""
     text = f"{type(exc).__name__}: {exc}"
     if group.size == 1:
@@ -138,7 +139,7 @@ def _agree(exc: Exception, group: MPI.Comm, err_comm: MPI.Comm, world: MPI.Comm,
     t0 = time.monotonic()
     while not req.Test():
         if time.monotonic() - t0 > AGREE_TIMEOUT_S:
-            write_record(run_dir, rc, "failed", end=time.time(), rank=world.rank,
+            write_record(run_dir, rc, "failed", start=start, end=time.time(), rank=world.rank,
                          message=f"world rank {world.rank} alone: {text}")
             print(f"pilegroup: rank {world.rank} of {world.size} failed alone in case "
                   f"{rc.name!r}: {text}; the other ranks of its group cannot go on, so the "
@@ -166,7 +167,8 @@ def _run_case(rc: ResolvedCase, run_dir: Path, group: MPI.Comm, err_comm: MPI.Co
         run_scenario(rc.scenario, run_dir, comm=group)
     except Exception as exc:  # noqa: BLE001 - recorded; the batch goes on (or aborts, above)
         log.debug("case %s failed", rc.name, exc_info=True)
-        status, message = "failed", _agree(exc, group, err_comm, world, rc, run_dir)
+        status, message = "failed", _agree(exc, group, err_comm, world, rc, run_dir,
+                                           start)
         if group.rank == 0:
             log.warning("case %s failed: %s", rc.name, message)
     if group.rank == 0:
@@ -252,6 +254,20 @@ class _Monitor:
         return self.rows
 
 
+@contextmanager
+def _quiet_runs() -> Iterator[None]:
+    """No progress bar of each run (the batch shows its own); the setting restored after."""
+    before = os.environ.get(PROGRESS_ENV)
+    os.environ[PROGRESS_ENV] = "0"
+    try:
+        yield
+    finally:
+        if before is None:
+            os.environ.pop(PROGRESS_ENV, None)
+        else:
+            os.environ[PROGRESS_ENV] = before
+
+
 def _wait_for_all(comm: MPI.Comm) -> None:
     """A barrier that sleeps instead of spinning while other groups still run cases."""
     req = comm.Ibarrier()
@@ -281,9 +297,7 @@ def run_batch(plan: Plan, out: str | Path, ranks_per_case: int = 1,
     """
     out = Path(out)
     group = split_world(comm, ranks_per_case)
-    err_comm = group.Dup()
     cases = resolve_cases(plan)
-    os.environ[PROGRESS_ENV] = "0"
     skipped, qdir = _prepare(cases, out, comm)
     queue = _Queue(qdir, [i for i in queue_order(cases) if not skipped[i]])
     monitor = None
@@ -293,15 +307,11 @@ def run_batch(plan: Plan, out: str | Path, ranks_per_case: int = 1,
                 "host": platform.node(), "started": time.strftime("%Y-%m-%dT%H:%M:%S"),
                 "queue": "largest estimated mesh first"}
         monitor = _Monitor(cases, out, skipped, head, progress)
+    err_comm = group.Dup()
     options = PETSc.Options().getAll()
-    with logging_redirect_tqdm() if monitor is not None and progress else nullcontext():
-        while True:
-            index = queue.claim() if group.rank == 0 else None
-            index = group.bcast(index, root=0)
-            if index is None:
-                break
-            rc = cases[index]
-            _run_case(rc, out / rc.name, group, err_comm, comm, options)
+    with _quiet_runs(), logging_redirect_tqdm() if monitor and progress else nullcontext():
+        while (index := group.bcast(queue.claim() if group.rank == 0 else None)) is not None:
+            _run_case(cases[index], out / cases[index].name, group, err_comm, comm, options)
         _wait_for_all(comm)
         rows = monitor.finish() if monitor is not None else []
     if comm.rank == 0:

@@ -118,7 +118,8 @@ def sweep_cases(sweep: dict[str, Any]) -> list[PlanCase]:
     if not keys:
         return []
     short = [k.rsplit(".", 1)[-1] for k in keys]
-    labels = [s if short.count(s) == 1 else k for s, k in zip(short, keys, strict=True)]
+    labels = [s if short.count(s) == 1 else re.sub(r"[^A-Za-z0-9._+-]", "_", k)
+              for s, k in zip(short, keys, strict=True)]
     out = []
     for combo in itertools.product(*(sweep[k] for k in keys)):
         name = ",".join(f"{lab}={_value_text(v)}" for lab, v in zip(labels, combo, strict=True))
