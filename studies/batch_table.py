@@ -125,6 +125,7 @@ def case_row(rc: ResolvedCase, run_dir: Path, skipped: bool = False) -> dict[str
                            "message": record.get("message"), "overrides": rc.case.override_dict(),
                            "run_dir": str(run_dir), "start": record.get("start"),
                            "end": record.get("end"), "ranks": record.get("ranks"),
+                           "peak_rss_scope": record.get("peak_rss_scope"),
                            "estimated_cells": round(rc.cost), "digest": rc.digest}
     start, end = row["start"], row["end"]
     row["wall_s"] = None if start is None or end is None else end - start
