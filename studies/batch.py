@@ -24,7 +24,8 @@ running the plan again resumes).
 
 World rank 0 runs cases like every rank and, in a thread of its own that does no MPI, watches
 the cases' records: it shows the progress and rewrites ``batch.json`` and ``batch.csv`` whenever
-a case starts or ends (:mod:`pilegroup.studies.batch_table`). Each case's peak memory is its own:
+a case starts or ends (:mod:`pilegroup.studies.batch_table`), every :data:`POLL_S` seconds or
+as soon as rank 0's own solve lets the thread run. Each case's peak memory is its own:
 the peak resident set of each rank is reset before the case (Linux ``/proc/self/clear_refs``),
 and the PETSc options database is restored, so one case's solver options do not carry over.
 """
