@@ -41,6 +41,8 @@ from pilegroup.model.mesh_estimate import estimated_cells
 
 #: Allowed case names: also the names of the cases' run folders.
 NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9._=,+-]*")
+#: Names of the batch's own files in its folder, which no case may take.
+RESERVED = ("batch.json", "batch.csv")
 #: Tables of a plan file and the keys each may hold.
 PLAN_KEYS = {"batch": ("scenario", "set"), "case": ("name", "set")}
 
@@ -94,9 +96,9 @@ def _check_keys(table: dict[str, Any], key: str, allowed: tuple[str, ...]) -> No
 
 
 def _check_name(name: object, key: str) -> str:
-    if not isinstance(name, str) or not NAME.fullmatch(name):
+    if not isinstance(name, str) or not NAME.fullmatch(name) or name in RESERVED:
         raise ScenarioError(key, name, "must be a name of letters, digits and ._=,+- (it "
-                            "names the case's run folder)")
+                            f"names the case's run folder), other than {', '.join(RESERVED)}")
     return name
 
 

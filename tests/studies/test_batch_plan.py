@@ -53,6 +53,7 @@ def test_sweep_keys_ending_alike_use_the_whole_key(tmp_path):
     ('[batch]\nscenario = "single_pile"\n', "plan = 'no cases'"),
     ('[batch]\nscenario = "nope.toml"\n[[case]]\nname = "a"\n', "batch.scenario"),
     ('[batch]\nscenario = "single_pile"\n[[case]]\nname = "a/b"\n', "case[0].name"),
+    ('[batch]\nscenario = "single_pile"\n[[case]]\nname = "batch.csv"\n', "case[0].name"),
     ('[batch]\nscenario = "single_pile"\n[[case]]\nname = "a"\n[[case]]\nname = "a"\n',
      "case name = 'a'"),
     ('[batch]\nscenario = "single_pile"\n[sweep]\n"numerics.mesh.size_m" = 1.0\n',
