@@ -21,6 +21,7 @@ from pilegroup.errors import RunInterrupted
 from pilegroup.fileio import write_text_atomic
 from pilegroup.model import BUNDLED, PilegroupError, ScenarioError, bundled_text, load_scenario
 from pilegroup.model.loader import parse_override
+from pilegroup.studies.cli_batch import COMMANDS as BATCH_COMMANDS
 
 log = logging.getLogger("pilegroup")
 
@@ -268,6 +269,8 @@ def build_parser() -> argparse.ArgumentParser:
         ("report", "plots and a Markdown summary of a run's output folder", _report_arguments),
     ):
         add_arguments(sub.add_parser(name, help=help_, description=DESCRIPTIONS[name]))
+    for name, help_, description, add_arguments in BATCH_COMMANDS:
+        add_arguments(sub.add_parser(name, help=help_, description=description))
     return p
 
 

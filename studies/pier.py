@@ -13,6 +13,7 @@ heads when there is no cap).
 from __future__ import annotations
 
 import logging
+import os
 import time
 from pathlib import Path
 from typing import Any
@@ -252,7 +253,9 @@ def run_coupled(sc: Scenario, md: MeshData, out: Path, preset: str | None = None
     stages = solver_stages(sc)
     ckpt = Checkpoints(out, sc, pb, [st.name for st in stages], exports)
     state = ckpt.restore(resume) if resume is not None else None
-    bar = tqdm(total=sc.time.end_day, unit="day", desc=sc.name, disable=pb.comm.rank != 0,
+    quiet = os.environ.get("PILEGROUP_PROGRESS") == "0"  # e.g. the runs of a batch
+    bar = tqdm(total=sc.time.end_day, unit="day", desc=sc.name,
+               disable=pb.comm.rank != 0 or quiet,
                bar_format="{desc}: {n:.3g}/{total:g} day |{bar}| {elapsed}{postfix}")
 
     def on_step(problem: BiotProblem, t: float, stage: str) -> None:

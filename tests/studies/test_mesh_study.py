@@ -1,0 +1,102 @@
+"""``pilegroup study mesh``: size checks, the cases, and the report against batch.csv."""
+
+import csv
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from pilegroup.model import load_scenario
+from pilegroup.studies.gci import gci
+from pilegroup.studies.mesh_study import (
+    PENALTY_KEY,
+    SizeCheck,
+    check_size,
+    estimated_memory_mb,
+    study_cases,
+    study_plan,
+)
+from pilegroup.studies.paper import PAPER_ELEMENTS, PAPER_HOURS, PAPER_SETTLEMENT_CM
+
+BIN = Path(sys.executable).parent
+
+
+def _csv(path):
+    with path.open(newline="") as fh:
+        return list(csv.DictReader(fh))
+
+
+def test_a_size_that_does_not_fit_is_reported_with_the_reason(small_pile):
+    ok = check_size(small_pile, {}, 0.6, ranks=1, groups=1, memory_mb=1e6)
+    assert ok.runnable and ok.reason == "" and ok.estimated_unknowns > 0
+    assert ok.estimated_memory_mb == pytest.approx(estimated_memory_mb(ok.estimated_unknowns, 1))
+    low = check_size(small_pile, {}, 0.6, ranks=1, groups=2, memory_mb=1000.0)
+    assert not low.runnable and "GB per case (1.0 GB of memory / 2 cases at once)" in low.reason
+    bad = check_size(small_pile, {}, 9.0, ranks=1, groups=1, memory_mb=1e6)
+    assert not bad.runnable and bad.reason.startswith("invalid: numerics.mesh.")
+
+
+def test_memory_grows_with_the_unknowns():
+    assert estimated_memory_mb(2e5, 2) > estimated_memory_mb(1e5, 2) > estimated_memory_mb(1e5, 1)
+
+
+def test_penalty_cases_at_the_coarsest_and_finest_size(small_pile):
+    sc = load_scenario(small_pile)
+    checks = [SizeCheck(1.0, True), SizeCheck(0.5, True), SizeCheck(0.1, False, "memory")]
+    cases = study_cases(sc, checks, 10.0)
+    assert [(c.name, c.h, c.penalty) for c in cases] == [
+        ("h1", 1.0, 1.0), ("h0.5", 0.5, 1.0), ("h1_penalty_x10", 1.0, 10.0),
+        ("h0.5_penalty_x10", 0.5, 10.0)]
+    plan = study_plan(small_pile, {"outputs.xdmf": False}, sc, cases)
+    assert dict(plan.cases[2].overrides)[PENALTY_KEY] == 10.0 * (
+        sc.interface.normal_stiffness_factor)
+    tied = load_scenario(small_pile, {"interface.mode": "tied"})
+    assert [c.name for c in study_cases(tied, checks, 10.0)] == ["h1", "h0.5"]
+
+
+@pytest.mark.mpi
+def test_study_report_agrees_with_the_batch(tmp_path, small_pile):
+    out = tmp_path / "study"
+    cmd = [str(BIN / "mpirun"), "-n", "2", str(BIN / "pilegroup"), "study", "mesh", small_pile,
+           "--sizes", "1.0", "0.6", "0.3", "9.0", "--out", str(out), "--no-progress",
+           "--set", "outputs.xdmf=false", "--set", "outputs.plots=false"]
+    r = subprocess.run(cmd, capture_output=True, text=True, timeout=300,
+                       env={**os.environ, "PILEGROUP_MESH_CACHE": str(tmp_path / "cache")})
+    assert r.returncode == 0, r.stderr[-3000:]
+    for name in ("mesh_study.md", "mesh_study.csv", "gci.csv", "settlement_vs_h.png",
+                 "error_vs_time.png", "friction_profiles_sizes.png",
+                 "relative_displacement_profiles_sizes.png"):
+        assert (out / name).stat().st_size > 0, name
+    batch = {row["name"]: row for row in _csv(out / "batch.csv")}
+    assert set(batch) == {"h1", "h0.6", "h0.3", "h1_penalty_x10", "h0.3_penalty_x10"}
+    assert all(row["status"] == "complete" for row in batch.values())
+    assert float(batch["h0.3_penalty_x10"][PENALTY_KEY]) == 1000.0
+    # the GCI table is the GCI of the batch's values at the last output time
+    table = {row["quantity"]: row for row in _csv(out / "gci.csv")}
+    h = (0.3, 0.6, 1.0)
+    for quantity, column in (("settlement_m", "settlement_m@2d"),
+                             ("friction_kPa[layer 1 mud]", "shaft_friction_kPa[1 mud]@2d"),
+                             ("friction_kPa[layer 2 silty_clay]",
+                              "shaft_friction_kPa[2 silty_clay]@2d")):
+        phi = tuple(float(batch[f"h{x:g}"][column]) for x in h)
+        want = gci(h, phi)
+        row = table[quantity]
+        assert [float(row[k]) for k in ("phi1", "phi2", "phi3")] == list(phi)
+        for k in ("p", "phi_ext", "gci_fine21"):
+            assert float(row[k]) == pytest.approx(getattr(want, k), rel=1e-12), (quantity, k)
+    assert {f"friction_kPa[gauge {z:g} m]" for z in (1, 4, 8, 11.5)} <= set(table)
+    sizes = {float(row["h_m"]): row for row in _csv(out / "mesh_study.csv")}
+    assert sizes[9.0]["status"].startswith("not run: invalid: numerics.mesh.")
+    assert sizes[0.8]["status"] == "not in the study" and sizes[0.3]["status"] == "complete"
+    for x in PAPER_ELEMENTS:
+        assert int(sizes[x]["paper_elements"]) == PAPER_ELEMENTS[x]
+        assert float(sizes[x]["paper_hours"]) == PAPER_HOURS[x]
+        assert float(sizes[x]["paper_settlement_cm"]) == PAPER_SETTLEMENT_CM[x]
+    assert float(sizes[0.3]["settlement_cm"]) == pytest.approx(
+        100 * float(batch["h0.3"]["settlement_m@2d"]), rel=1e-12)
+    assert int(sizes[0.3]["unknowns"]) == int(batch["h0.3"]["unknowns"])
+    text = (out / "mesh_study.md").read_text()
+    assert "* h = 9 m: not run: invalid:" in text and "## Interface normal penalty" in text
+    assert "the answer depends on it" in text or "the answer does not depend on it" in text
