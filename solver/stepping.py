@@ -183,21 +183,26 @@ def run_stages(
         if on_milestone is not None:
             on_milestone(pb, t, stage)
 
+    log = RunLog()
+    t_wall = time.perf_counter()
     try:
-        return _run(problem, stages, ts, milestone, geostatic_tol, on_step)
+        return _run(problem, stages, ts, milestone, geostatic_tol, on_step, log)
+    except StepFailure as exc:
+        exc.run_log = log  # what was done up to the failure (the failed run's summary)
+        raise
     finally:
+        log.wall_s = time.perf_counter() - t_wall
         for e in exports:
             e.close()
 
 
 def _run(problem: BiotProblem, stages: Sequence[Stage], ts: TimeStepping,
-         on_milestone: Callback, geostatic_tol: float, on_step: Callback | None) -> RunLog:
-    """The stage loop of :func:`run_stages`."""
-    log = RunLog()
+         on_milestone: Callback, geostatic_tol: float, on_step: Callback | None,
+         log: RunLog) -> RunLog:
+    """The stage loop of :func:`run_stages`, recording into ``log``."""
     stepper = AdaptiveStepper(ts, log)
     t = 0.0
     lam = 0.0
-    t_wall = time.perf_counter()
     for i, st in enumerate(stages):
         if st.kind == "geostatic":
             problem.set_initial_stress(problem.geostatic_stress())
@@ -245,5 +250,4 @@ def _run(problem: BiotProblem, stages: Sequence[Stage], ts: TimeStepping,
         t = stepper.advance(problem, t0, t1, lam_of, st.name, on_milestone=on_milestone,
                             on_step=on_step)
         lam = lam1
-    log.wall_s = time.perf_counter() - t_wall
     return log

@@ -36,6 +36,7 @@ from pilegroup.solver import (
     InterfaceCoupling,
     NewtonOptions,
     PressureBC,
+    RunLog,
     SoilMaterial,
     SolverOptions,
     Stage,
@@ -209,7 +210,8 @@ def run_coupled(sc: Scenario, md: MeshData, out: Path, preset: str | None = None
     Exports, written at every output time: ``settlement.csv``, the pile tables
     (:class:`~pilegroup.studies.piles.PileProbe`), ``results*.xdmf`` (when
     ``outputs.xdmf``) and ``summary_solver.json`` (``complete: false`` until the end, then the
-    full run summary).
+    full run summary; after a :class:`~pilegroup.errors.StepFailure` the run summary up to the
+    failure, ``complete: false``, with the message as ``failure``).
     """
     t0 = time.perf_counter()
     symmetry = resolve_symmetry(sc)
@@ -248,9 +250,11 @@ def run_coupled(sc: Scenario, md: MeshData, out: Path, preset: str | None = None
                              geostatic_tol=GEOSTATIC_TOL_M, exports=exports)
     except StepFailure as exc:
         load = exc.load_factor * sc.total_cap_load()
-        raise StepFailure(f"no equilibrium beyond load factor {exc.load_factor:.4g} "
-                          f"({load:.6g} kN) at t = {exc.t:.6g} day, stage {exc.stage!r}: {exc}",
-                          exc.t, exc.load_factor, exc.stage) from exc
+        msg = (f"no equilibrium beyond load factor {exc.load_factor:.4g} ({load:.6g} kN) at "
+               f"t = {exc.t:.6g} day, stage {exc.stage!r}: {exc}")
+        if isinstance(exc.run_log, RunLog):  # the counts and extremes up to the failure
+            writer.finish(run_summary(pb, exc.run_log, summary(False) | {"failure": msg}))
+        raise StepFailure(msg, exc.t, exc.load_factor, exc.stage, exc.run_log) from exc
     finally:
         bar.close()
     data = run_summary(pb, run_log, summary(True))
