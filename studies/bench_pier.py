@@ -45,7 +45,8 @@ def _row(h: float, symmetry: str, out: Path, fin: Finished) -> dict[str, Any]:
     sol = s["solver"]
     rss = sol.get("peak_rss_mb_per_rank", [])
     return {**row, "status": "complete" if sol.get("complete") else "incomplete",
-            "symmetry": sol.get("symmetry", symmetry), "cells": s["mesh"]["cells"],
+            "symmetry": (sol.get("symmetry") or {}).get("model", symmetry),
+            "cells": s["mesh"]["cells"],
             "dofs": sol["dofs"], "preset": sol["linear_solver"],
             "newton": sol["newton_iterations"], "krylov": sol["ksp_iterations"],
             "factorisations": sol["lu_factorisations"],
