@@ -130,7 +130,7 @@ def test_run_isolated_kills_the_whole_group_at_the_timeout():
             "print(p.pid, flush=True)\n"
             "time.sleep(120)\n")
     t0 = time.perf_counter()
-    fin = run_isolated([sys.executable, "-c", code], timeout=3)
+    fin = run_isolated([sys.executable, "-c", code], timeout=2)
     assert fin.timed_out and time.perf_counter() - t0 < 30
     grandchild = int(fin.stdout.split()[0])
     for _ in range(50):
