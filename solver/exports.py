@@ -232,7 +232,12 @@ class _InterfaceSeries:
 
 
 def _vertex_to_dof(V: fem.FunctionSpace) -> np.ndarray:
-    """Node (block dof) of each vertex of a degree-1 Lagrange space (dof i = cell vertex i)."""
+    """Node (block dof) of each vertex of a Lagrange space.
+
+    Basix numbers a Lagrange cell's dofs by entity, the vertices first in the reference order
+    of the cell's vertices, so dof i of a cell is its vertex i for every degree (the Q2
+    displacement space's edge, face and interior nodes come after and are not output).
+    """
     msh = V.mesh
     tdim = msh.topology.dim
     msh.topology.create_connectivity(tdim, 0)
@@ -242,10 +247,8 @@ def _vertex_to_dof(V: fem.FunctionSpace) -> np.ndarray:
     nc = msh.topology.index_map(tdim).size_local + msh.topology.index_map(tdim).num_ghosts
     if nc == 0:  # a rank without cells of this mesh (e.g. no interface facets)
         return out
-    dm = V.dofmap.list[:nc]
-    nper = dm.shape[1]
-    if nper != c2v.offsets[1] - c2v.offsets[0]:
-        raise ValueError("interface output needs a degree-1 displacement space (Q1Q1)")
+    nper = int(c2v.offsets[1] - c2v.offsets[0])
+    dm = V.dofmap.list[:nc, :nper]
     out[c2v.array[: nc * nper]] = dm.reshape(-1)
     return out
 

@@ -245,9 +245,13 @@ def run_stages(
         if on_milestone is not None:
             on_milestone(pb, t, stage)
 
+    run_state = state or RunState()
     try:
-        return _Run(problem, stages, ts, state or RunState(), boundary).run(
+        return _Run(problem, stages, ts, run_state, boundary).run(
             milestone, geostatic_tol, on_step)
+    except StepFailure as exc:
+        exc.run_log = run_state.log  # what was done up to the failure (the failed run's summary)
+        raise
     finally:
         for e in exports:
             e.close()

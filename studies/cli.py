@@ -3,6 +3,10 @@
 Exit codes: 0 success, 1 a run failed (e.g. no convergence), 2 invalid input (a clear one-line
 message naming the key, the value and what is allowed; no traceback), 130/143 a run stopped by
 SIGINT/SIGTERM after saving a checkpoint (128 + the signal number).
+
+Under MPI a :class:`~pilegroup.errors.PilegroupError` is raised on every rank alike (the
+scenario, the stepper's decisions and the Newton checks are collective), so rank 0 prints its
+one line; any other exception may be one rank's alone and ends every rank (:func:`_abort`).
 """
 
 from __future__ import annotations
@@ -55,7 +59,10 @@ DESCRIPTIONS = {
     "bench": ("constitutive: law updates per second; meshing: cells, quality and time for the "
               "paper's five mesh sizes; verification: run time against error for Terzaghi and "
               "Mandel (table, JSON and PNG); pier: the whole job per mesh size and symmetry "
-              "(unknowns, Newton and Krylov counts, factorisations, wall, peak memory)."),
+              "(unknowns, Newton and Krylov counts, factorisations, wall, peak memory); "
+              "stability: the small scenario under extreme time steps, permeability, "
+              "stiffness, loads, interface options and element pairs, each run in its own "
+              "process under a timeout (status, counts, settlement, max |p|, NaN check)."),
     "report": ("Read the CSV and JSON files of a finished or interrupted run (settlement.csv, "
                "pile_profiles.csv, layer_history.csv, pile_loads.csv, load_settlement.csv, "
                "gauges.csv, summary.json), write PNG "
@@ -203,9 +210,15 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     if args.what == "pier":
         from pilegroup.studies.bench_pier import bench_pier
 
-        rows = bench_pier(args.scenario, args.sizes or [1.0], args.symmetry, args.ranks,
-                          args.out or "out/bench_pier")
+        rows = bench_pier(args.scenario, args.sizes or [1.0], args.symmetry, args.ranks or 2,
+                          args.out or "out/bench_pier", args.timeout)
         return 0 if all(r["status"] == "complete" for r in rows) else 1
+    if args.what == "stability":
+        from pilegroup.studies.bench_stability import bench_stability
+
+        rows = bench_stability(args.out or "out/bench_stability", args.cases, args.ranks or 1,
+                               args.timeout or 900.0)
+        return 0 if all(r["clean"] for r in rows) else 1
     from pilegroup.studies.verification import bench_verification
 
     bench_verification(out_dir=args.out or "out/bench_verification")
@@ -213,15 +226,23 @@ def _cmd_bench(args: argparse.Namespace) -> int:
 
 
 def _bench_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("what", choices=["constitutive", "meshing", "verification", "pier"])
+    p.add_argument("what", choices=["constitutive", "meshing", "verification", "pier",
+                                    "stability"])
     p.add_argument("--sizes", type=float, nargs="*", default=None, metavar="H",
                    help="meshing: pile-surface sizes in m (default: the paper's five); "
                    "pier: the sizes to run (default: 1.0)")
-    p.add_argument("--out", default=None, help="verification, pier: output folder")
+    p.add_argument("--out", default=None, help="verification, pier, stability: output folder")
     p.add_argument("--scenario", default="pier667", help="pier: the scenario to run")
     p.add_argument("--symmetry", nargs="*", default=["auto"],
                    help="pier: the numerics.symmetry values to run (default: auto)")
-    p.add_argument("--ranks", type=int, default=2, help="pier: MPI ranks of each run")
+    p.add_argument("--ranks", type=int, default=None,
+                   help="pier, stability: MPI ranks of each run (default: 2 for pier, 1 for "
+                   "stability)")
+    p.add_argument("--timeout", type=float, default=None, metavar="S",
+                   help="pier, stability: seconds each run may take before it is killed "
+                   "(default: no limit for pier, 900 for stability)")
+    p.add_argument("--cases", nargs="*", default=None, metavar="CASE",
+                   help="stability: the cases to run (default: all)")
     p.set_defaults(func=_cmd_bench)
 
 
@@ -281,16 +302,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     setup_logging(args.verbose)
     try:
         return int(args.func(args) or 0)
-    except ScenarioError as exc:
-        print(f"pilegroup: invalid input: {exc}", file=sys.stderr)
+    except ScenarioError as exc:  # raised on every rank alike: rank 0 tells
+        _say(f"pilegroup: invalid input: {exc}")
         return EXIT_INPUT
     except RunInterrupted as exc:  # every rank alike; one line from rank 0
-        if _world_rank() == 0:
-            print(f"pilegroup: {exc}; resume with: {_resume_command(argv)}", file=sys.stderr,
-                  flush=True)
+        _say(f"pilegroup: {exc}; resume with: {_resume_command(argv)}")
         return 128 + exc.signum
     except PilegroupError as exc:
-        print(f"pilegroup: failed: {exc}", file=sys.stderr)
+        _say(f"pilegroup: failed: {exc}")
         return EXIT_FAILED
     except Exception as exc:  # a failure that may be one rank's alone: end every rank
         return _abort(exc, args.verbose)
@@ -304,6 +323,12 @@ def _resume_command(argv: Sequence[str] | None) -> str:
     ranks = MPI.COMM_WORLD.size
     mpi = ["mpirun", "-n", str(ranks)] if ranks > 1 else []
     return shlex.join([*mpi, "pilegroup", *args] + ([] if "--resume" in args else ["--resume"]))
+
+
+def _say(line: str) -> None:
+    """One line on stderr from rank 0 of a collective failure (not one per rank)."""
+    if _world_rank() == 0:
+        print(line, file=sys.stderr, flush=True)
 
 
 def _abort(exc: Exception, verbose: bool) -> int:

@@ -37,6 +37,7 @@ from pilegroup.solver import (
     InterfaceCoupling,
     NewtonOptions,
     PressureBC,
+    RunLog,
     SoilMaterial,
     SolverOptions,
     Stage,
@@ -214,12 +215,13 @@ def run_coupled(sc: Scenario, md: MeshData, out: Path, preset: str | None = None
     Exports, written at every output time: ``settlement.csv``, the pile tables
     (:class:`~pilegroup.studies.piles.PileProbe`), ``gauges.csv`` (when the scenario has
     ``outputs.gauge_depths_m``: :class:`~pilegroup.studies.gauge_probe.GaugeProbe`),
-    ``results*.xdmf`` (when
-    ``outputs.xdmf``) and ``summary_solver.json`` (``complete: false`` until the end, then the
-    full run summary). Checkpoints (:class:`~pilegroup.studies.checkpoint.Checkpoints`) at
-    every output time, every ``outputs.checkpoint_every_min`` and on a stop request (which
-    ends the run with :class:`~pilegroup.errors.RunInterrupted`). ``resume``: the manifest of
-    the checkpoint to continue from (:func:`~pilegroup.studies.checkpoint.check_resume`).
+    ``results*.xdmf`` (when ``outputs.xdmf``) and ``summary_solver.json`` (``complete: false``
+    until the end, then the full run summary; after a :class:`~pilegroup.errors.StepFailure`
+    the summary up to the failure, with the message as ``failure``). Checkpoints
+    (:class:`~pilegroup.studies.checkpoint.Checkpoints`) at every output time, every
+    ``outputs.checkpoint_every_min`` and on a stop request (which ends the run with
+    :class:`~pilegroup.errors.RunInterrupted`). ``resume``: the manifest of the checkpoint to
+    continue from (:func:`~pilegroup.studies.checkpoint.check_resume`).
     """
     t0 = time.perf_counter()
     symmetry = resolve_symmetry(sc)
@@ -270,9 +272,11 @@ def run_coupled(sc: Scenario, md: MeshData, out: Path, preset: str | None = None
                              boundary=ckpt)
     except StepFailure as exc:
         load = exc.load_factor * sc.total_cap_load()
-        raise StepFailure(f"no equilibrium beyond load factor {exc.load_factor:.4g} "
-                          f"({load:.6g} kN) at t = {exc.t:.6g} day, stage {exc.stage!r}: {exc}",
-                          exc.t, exc.load_factor, exc.stage) from exc
+        msg = (f"no equilibrium beyond load factor {exc.load_factor:.4g} ({load:.6g} kN) at "
+               f"t = {exc.t:.6g} day, stage {exc.stage!r}: {exc}")
+        if isinstance(exc.run_log, RunLog):  # the counts and extremes up to the failure
+            writer.finish(run_summary(pb, exc.run_log, summary(False) | {"failure": msg}))
+        raise StepFailure(msg, exc.t, exc.load_factor, exc.stage, exc.run_log) from exc
     finally:
         bar.close()
     data = run_summary(pb, run_log, summary(True))

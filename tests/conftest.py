@@ -11,6 +11,7 @@ from pathlib import Path
 import pytest  # noqa: E402
 
 import pilegroup  # noqa: F401
+from pilegroup.studies.small_pile import small_pile_text
 
 BIN = Path(sys.executable).parent
 
@@ -27,22 +28,6 @@ def _run_cli(scenario, out, ranks=1, sets=(), cache=None, timeout=900):
     cache = cache or Path(out).parent / "cache"
     return subprocess.run(cmd, capture_output=True, text=True, timeout=timeout,
                           env={**os.environ, "PILEGROUP_MESH_CACHE": str(cache)})
-
-
-def small_pile_text() -> str:
-    """The bundled single_pile scenario coarsened for the fast tier (same physics)."""
-    from pilegroup.model import bundled_text
-
-    text = bundled_text("single_pile")
-    for old, new in [("size_m = 0.5", "size_m = 1.0\nn_circ_min = 8"),
-                     ("far_field_size_m = 4.0", "far_field_size_m = 8.0"),
-                     ("dz_max_m = 2.0", "dz_max_m = 4.0\ndz_surface_m = 2.0\ndz_toe_m = 2.0"),
-                     ("dz_max_deep_m = 4.0", "dz_max_deep_m = 8.0"),
-                     ("end_day = 10.0", "end_day = 2.0"),
-                     ("output_days = [0.0, 0.5, 10.0]", "output_days = [0.0, 0.5, 2.0]")]:
-        assert old in text, old
-        text = text.replace(old, new)
-    return text
 
 
 @pytest.fixture(scope="session")

@@ -81,12 +81,15 @@ class StepFailure(SolverError):
     """The adaptive stepper could not complete a step even at the minimum step size.
 
     ``t`` (day), ``load_factor`` and ``stage`` are those of the last equilibrium reached.
+    ``run_log``: what the run did up to the failure (the stepper's ``RunLog``: accepted
+    steps, rejected attempts), set by ``solver.run_stages``; ``None`` when raised elsewhere.
     """
 
     def __init__(self, message: str, t: float = 0.0, load_factor: float = 0.0,
-                 stage: str = "") -> None:
+                 stage: str = "", run_log: object | None = None) -> None:
         super().__init__(message)
         self.t, self.load_factor, self.stage = t, load_factor, stage
+        self.run_log = run_log
 
 
 class RunInterrupted(PilegroupError):

@@ -353,25 +353,30 @@ def oscillation_measure(p: np.ndarray, p0: float) -> float:
 
 
 def first_step_oscillation(pair: str = "Q2Q1", stabilise: bool = True, nz: int = 20,
-                           T_first: float = 0.0, comm: MPI.Comm | None = None
+                           T_first: float = 0.0, comm: MPI.Comm | None = None,
+                           undrained_first: bool = True, stab_factor: float = 1.0
                            ) -> dict[str, Any]:
     """Pressure profile of the Terzaghi column after the first step; its oscillation measure.
 
     ``T_first = 0`` is the undrained loading step (``dt = 0``); a small positive ``T_first``
-    adds one drained step of that time factor. Uniform mesh of ``nz`` cells, same data as
-    :func:`terzaghi`. Returns ``{"measure", "profile", "z", "p0"}``.
+    adds one drained step of that time factor, or, with ``undrained_first = False``, applies
+    the load in that one drained step from rest. Uniform mesh of ``nz`` cells, same data as
+    :func:`terzaghi`; ``stab_factor`` scales the Q1-Q1 stabilisation
+    (:class:`~pilegroup.solver.Discretisation`). Returns ``{"measure", "profile", "z", "p0",
+    "nodes"}``: ``profile`` at vertices and quarter points by increasing depth ``z`` (m,
+    negative), ``nodes`` its values at the vertices (the Q1 pressure nodes, top first).
     """
     comm = comm or world()
     col = TerzaghiColumn()
     md = build_box(comm, (0.0, 1.0), (0.0, 1.0), np.linspace(-col.H, 0.0, nz + 1), 1, 1)
-    pb = col.problem(md, Discretisation(pair=pair, stabilise=stabilise))
-    info = pb.solve_step(0.0, 1.0)
-    assert info.converged, info.message
-    pb.commit()
-    if T_first > 0:
-        info = pb.solve_step(T_first * col.H**2 / col.cv, 1.0)
+    pb = col.problem(md, Discretisation(pair=pair, stabilise=stabilise, stab_factor=stab_factor))
+    steps = ([0.0] if undrained_first or T_first <= 0 else []) \
+        + ([T_first * col.H**2 / col.cv] if T_first > 0 else [])
+    for dt in steps:
+        info = pb.solve_step(dt, 1.0)
         assert info.converged, info.message
         pb.commit()
-    z = np.linspace(0.0, -col.H, 4 * nz + 1)  # by increasing depth (vertices and mid-points)
+    z = np.linspace(0.0, -col.H, 4 * nz + 1)  # by increasing depth (vertices and quarter points)
     prof = p_along(pb, z, 0.0, 0.0)
-    return {"measure": oscillation_measure(prof, col.p0), "profile": prof, "z": z, "p0": col.p0}
+    return {"measure": oscillation_measure(prof, col.p0), "profile": prof, "z": z, "p0": col.p0,
+            "nodes": prof[::4]}

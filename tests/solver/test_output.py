@@ -75,3 +75,24 @@ def test_staged_run_parallel_matches_serial(tmp_path):
               "steps"):
         assert s2[k] == pytest.approx(s1[k], rel=1e-8)
     assert np.allclose([h["t"] for h in s1["history"]], [h["t"] for h in s2["history"]])
+
+
+@pytest.mark.parametrize("degree", [1, 2])
+def test_vertex_to_dof_finds_the_node_at_each_vertex(degree):
+    # the interface output reads soil nodes at the facet-mesh vertices (Q1 and Q2 displacements)
+    from dolfinx import fem
+    from dolfinx import mesh as dmesh
+    from mpi4py import MPI
+
+    from pilegroup.solver.exports import _vertex_to_dof
+
+    msh = dmesh.create_box(MPI.COMM_WORLD, [[0, 0, 0], [1, 2, 1]], [2, 3, 2],
+                           cell_type=dmesh.CellType.hexahedron)
+    V = fem.functionspace(msh, ("Lagrange", degree, (3,)))
+    node = _vertex_to_dof(V)
+    nv = msh.topology.index_map(0).size_local + msh.topology.index_map(0).num_ghosts
+    msh.topology.create_connectivity(0, 3)
+    vertices = np.arange(nv, dtype=np.int32)
+    xv = msh.geometry.x[dmesh.entities_to_geometry(msh, 0, vertices).reshape(-1)]
+    assert np.all(node >= 0)
+    assert np.allclose(V.tabulate_dof_coordinates()[node], xv, atol=1e-12)

@@ -3,6 +3,7 @@
 import json
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import pytest
@@ -13,6 +14,7 @@ BIN = Path(sys.executable).parent
 #: the abort, rank 0 would wait for ever.
 SCRIPT = r"""
 import sys
+import time
 from mpi4py import MPI
 from pilegroup.studies import cli, run
 
@@ -54,3 +56,67 @@ def test_collective_failure_writes_failed_summary(tmp_path, small_pile, monkeypa
     s = json.loads((tmp_path / "run" / "summary.json").read_text())
     assert s["status"] == "failed" and s["rank"] is None
     assert s["reason"] == "StepFailure: stage 'load': step at t = 0.5 day failed"
+
+
+def _pilegroup_lines(stderr):
+    return [ln for ln in stderr.splitlines() if ln.startswith("pilegroup:")]
+
+
+def _mpirun(args, timeout=120, **kw):
+    """``mpirun -n 2 ARGS`` under a timeout; returns the completed process and its wall."""
+    t0 = time.perf_counter()
+    r = subprocess.run([str(BIN / "mpirun"), "-n", "2", *args], capture_output=True, text=True,
+                       timeout=timeout, **kw)
+    return r, time.perf_counter() - t0
+
+
+@pytest.mark.mpi
+def test_verify_collective_failure_prints_one_line(tmp_path):
+    # the Gauss-point interface needs Q1 displacements: every rank rejects Q2Q1 alike
+    r, _ = _mpirun([str(BIN / "pilegroup"), "verify", "shaft-capacity", "--pair", "Q2Q1",
+                    "--interface-quadrature", "gauss"], cwd=tmp_path)
+    assert r.returncode == 1, r.stderr[-2000:]
+    lines = _pilegroup_lines(r.stderr)
+    assert len(lines) == 1 and lines[0].startswith("pilegroup: failed: InterfaceCoupling"), \
+        r.stderr[-2000:]
+    assert "Traceback" not in r.stderr
+
+
+#: ``pilegroup verify`` whose case raises on rank 1 only while rank 0 waits in a collective call.
+VERIFY_SCRIPT = r"""
+import sys
+import time
+from mpi4py import MPI
+from pilegroup.studies import cli
+from pilegroup.studies.verification import runner
+
+def case_failing_on_one_rank(name, size="fast", **overrides):
+    if MPI.COMM_WORLD.rank == 1:
+        raise KeyError("state 'gap' missing (only on this rank)")
+    MPI.COMM_WORLD.barrier()
+
+runner.run_case = case_failing_on_one_rank
+sys.exit(cli.main(["verify", "terzaghi"]))
+"""
+
+
+@pytest.mark.mpi
+def test_verify_one_rank_failure_ends_every_rank(tmp_path):
+    r, wall = _mpirun([sys.executable, "-c", VERIFY_SCRIPT], cwd=tmp_path)
+    assert r.returncode == 1, r.stderr[-2000:]
+    assert _pilegroup_lines(r.stderr) == [
+        "pilegroup: rank 1 of 2 failed: KeyError: \"state 'gap' missing (only on this rank)\""]
+    assert wall < 60  # rank 0, waiting in the barrier, was ended
+
+
+@pytest.mark.mpi
+def test_bench_failure_on_rank_0_ends_the_job(tmp_path):
+    # rank 0 drives the cases and cannot create its output folder under a file
+    (tmp_path / "file").write_text("")
+    r, wall = _mpirun([str(BIN / "pilegroup"), "bench", "stability", "--out",
+                       str(tmp_path / "file" / "out"), "--cases", "dt_whole_run"])
+    assert r.returncode == 1, r.stderr[-2000:]
+    lines = _pilegroup_lines(r.stderr)
+    assert len(lines) == 1 and lines[0].startswith(
+        "pilegroup: rank 0 of 2 failed: NotADirectoryError"), r.stderr[-2000:]
+    assert wall < 60
