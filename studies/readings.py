@@ -24,7 +24,7 @@ import numpy as np
 
 from pilegroup.studies.paper import SOFT_LAYERS
 from pilegroup.studies.report import friction_change, relative_rates
-from pilegroup.studies.rundata import RunData, layer_series, load_run
+from pilegroup.studies.rundata import RunData, layer_series, load_run, zero_note
 
 #: Depth (m) where the paper's measured friction stops growing with depth (Section 2: "from
 #: 0 m to 30.36 m ... increases", then decreases to the pile bottom).
@@ -67,7 +67,7 @@ def case_row(run: RunData, times: tuple[float, ...] = TIMES) -> list[str]:
     series = layer_series(run, "shaft_friction_kPa")
     fr = ["/".join(f"{_at(*series[j], tq):.2f}" if j in series else "-" for j in SOFT_LAYERS)
           for tq in times]
-    rates = {j: r[5] for j, r in relative_rates(run).items()}
+    rates = {} if zero_note(run) else {j: r[5] for j, r in relative_rates(run).items()}
     peak = friction_peak(run)
     third = "n/a" if peak is None else ("yes" if peak[1] else "no") + f" (peak in layer {peak[0]})"
     return [*(f"{x:.2f}" for x in w), *fr,
