@@ -2,9 +2,10 @@
 
 Construction (gmsh built-in "geo" kernel, lengths in m):
 
-1. **Plan view (z = 0), all quadrilaterals** (:mod:`pilegroup.geometry.plan`): o-grid cells
-   around the piles in the structured region (the cap outline, or the piles plus a margin),
-   an unstructured recombined far field around it.
+1. **Plan view (z = 0), all quadrilaterals** (:mod:`pilegroup.geometry.far_field`): o-grid
+   cells around the piles in the structured region (the cap outline, or the piles plus a
+   margin), an unstructured far field around it meshed once into quadrilaterals; a model of a
+   mirror-symmetric layout is one part and its mirror images.
 2. **Extrusion.** The whole plan is extruded down through every layer boundary, the pile toes
    and the bottom; the structured region is extruded up through the pile tops and the cap top.
    Each slab carries graded element heights (``vertical.py``) and ``recombine=True`` so quads

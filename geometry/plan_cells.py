@@ -51,7 +51,7 @@ def _reverse(path: list[int]) -> list[int]:
 def _straight(pv: PlanView, a: int, b: int, n: int, half: bool) -> list[int]:
     """Curves from point ``a`` to ``b``: a side of ``n`` edges, or half of one.
 
-    ``half``: ``a`` is a node of the full model, ``b`` the side's midpoint on a plane; for odd
+    ``half``: ``a`` is a node of the uncut side, ``b`` the side's midpoint on a plane; for odd
     ``n`` the half edge is the one at ``b``.
     """
     if not half or n % 2 == 0:
@@ -87,7 +87,7 @@ class _CutPile:
         self.m_in, self.m_out, self.coef = radial_edges(spec, p, [pv.xy(t) for t in g],
                                                         n_circ)
         self.centre = pv.point(self.cx, self.cy)
-        # on an odd quadrant the node on the plane is the midpoint of the full model's chord
+        # on an odd quadrant the node on the plane is the midpoint of the uncut N-gon's chord
         self.r_mid = self.r if self.nq % 2 == 0 else self.r * math.cos(math.pi / n_circ)
 
     def at(self, dx: float, dy: float) -> int:

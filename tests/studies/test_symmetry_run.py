@@ -6,7 +6,7 @@ nodes and cells on the quarter's side, tests/geometry/test_symmetry.py), so the 
 differ only by the symmetry conditions and agree to the solver's accuracy, not to a
 discretisation error: the settlement, every pile's head force and the centre pile's axial
 force profile within 1e-6 relative (Newton stops at 1e-9 of the residual, the CSV files keep
-8-10 significant digits; measured: equal to the last printed digit), far below the 0.2 % a
+9 significant digits; measured: equal to the last printed digit), far below the 0.2 % a
 reduced model is allowed. The centre pile's friction profile too, except at the toe: the nodes
 of the toe ring also carry the base's material point, whose first shear component is along x
 (the base frame of solver/interface.py), and a quarter ring's mean of it is not the full
