@@ -206,7 +206,7 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     if args.what == "meshing":
         from pilegroup.geometry.bench import main as bench_main
 
-        return bench_main([str(h) for h in args.sizes] if args.sizes else [])
+        return bench_main([str(h) for h in args.sizes or []] + ["--symmetry", *args.symmetry])
     if args.what == "pier":
         from pilegroup.studies.bench_pier import bench_pier
 
@@ -234,7 +234,8 @@ def _bench_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--out", default=None, help="verification, pier, stability: output folder")
     p.add_argument("--scenario", default="pier667", help="pier: the scenario to run")
     p.add_argument("--symmetry", nargs="*", default=["auto"],
-                   help="pier: the numerics.symmetry values to run (default: auto)")
+                   help="pier, meshing: the numerics.symmetry values to run (default: auto,"
+                   " the part the geometry's symmetry allows)")
     p.add_argument("--ranks", type=int, default=None,
                    help="pier, stability: MPI ranks of each run (default: 2 for pier, 1 for "
                    "stability)")
