@@ -26,6 +26,7 @@ from pilegroup.fileio import write_text_atomic
 from pilegroup.model import BUNDLED, PilegroupError, ScenarioError, bundled_text, load_scenario
 from pilegroup.model.loader import parse_override
 from pilegroup.studies.cli_batch import COMMANDS as BATCH_COMMANDS
+from pilegroup.studies.interrupt import abort_job
 
 log = logging.getLogger("pilegroup")
 
@@ -340,10 +341,11 @@ def _abort(exc: Exception, verbose: bool) -> int:
     where = f"rank {comm.rank} of {comm.size}" if comm.size > 1 else "run"
     if verbose:
         traceback.print_exc()
-    print(f"pilegroup: {where} failed: {type(exc).__name__}: {exc}", file=sys.stderr,
-          flush=True)
+    line = f"pilegroup: {where} failed: {type(exc).__name__}: {exc}"
     if comm.size > 1:
-        comm.Abort(EXIT_FAILED)
+        abort_job(line, EXIT_FAILED)
+    else:
+        print(line, file=sys.stderr, flush=True)
     return EXIT_FAILED
 
 
