@@ -32,6 +32,8 @@ and the PETSc options database is restored, so one case's solver options do not 
 
 from __future__ import annotations
 
+import ctypes
+import gc
 import logging
 import os
 import platform
@@ -74,6 +76,32 @@ class BatchResult:
 
     rows: list[dict[str, Any]] = field(default_factory=list)
     failed: int = 0
+
+
+def release_memory(comm: MPI.Comm) -> None:
+    """Give back what an earlier case left (collective).
+
+    Python cycles, PETSc objects whose destruction waits for a collective clean-up, and the C
+    heap's free pages (glibc ``malloc_trim``): the next case's peak memory is then not raised
+    by the last one's leftovers.
+    """
+    gc.collect()
+    PETSc.garbage_cleanup(comm)
+    try:
+        ctypes.CDLL(None).malloc_trim(0)
+    except (OSError, AttributeError):  # not glibc
+        pass
+
+
+def rss_mb() -> float:
+    """Resident memory of this process now, MB (Linux; 0 elsewhere)."""
+    try:
+        for line in Path("/proc/self/status").read_text().splitlines():
+            if line.startswith("VmRSS:"):
+                return int(line.split()[1]) / 1024.0  # kB
+    except OSError:
+        pass
+    return 0.0
 
 
 def reset_peak_rss() -> bool:
@@ -161,6 +189,8 @@ def _run_case(rc: ResolvedCase, run_dir: Path, group: MPI.Comm, err_comm: MPI.Co
         run_dir.mkdir(parents=True)
         write_record(run_dir, rc, "running", start=start, ranks=group.size)
     group.Barrier()
+    release_memory(group)
+    rss_at_start = rss_mb()
     scope = "case" if reset_peak_rss() else "process"
     restore_petsc_options(options)
     status, message = "complete", None
@@ -172,9 +202,11 @@ def _run_case(rc: ResolvedCase, run_dir: Path, group: MPI.Comm, err_comm: MPI.Co
                                            start)
         if group.rank == 0:
             log.warning("case %s failed: %s", rc.name, message)
+    rss_at_start = max(group.allgather(rss_at_start))
     if group.rank == 0:
         write_record(run_dir, rc, status, start=start, end=time.time(), ranks=group.size,
-                     message=message, peak_rss_scope=scope)
+                     message=message, peak_rss_scope=scope,
+                     rss_at_start_mb=round(rss_at_start, 1))
 
 
 class _Monitor:

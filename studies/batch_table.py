@@ -36,7 +36,7 @@ BATCH_CSV = "batch.csv"
 #: Columns of ``batch.csv`` before the overrides and the per-time columns.
 HEAD = ("name", "status", "skipped", "message", "start", "end", "wall_s", "estimated_cells",
         "cells", "unknowns", "symmetry", "newton", "krylov", "peak_rss_mb_max",
-        "peak_rss_mb_per_rank")
+        "peak_rss_mb_per_rank", "rss_at_start_mb")
 #: The per-time quantities of a row: key -> CSV column stem.
 SERIES = {"head_force_kN": "head_force_kN[pile {}]",
           "layer_friction_kPa": "shaft_friction_kPa[{}]",
@@ -118,6 +118,7 @@ def case_row(rc: ResolvedCase, run_dir: Path, skipped: bool = False) -> dict[str
                            "run_dir": str(run_dir), "start": record.get("start"),
                            "end": record.get("end"), "ranks": record.get("ranks"),
                            "peak_rss_scope": record.get("peak_rss_scope"),
+                           "rss_at_start_mb": record.get("rss_at_start_mb"),
                            "estimated_cells": round(rc.cost), "digest": rc.digest}
     start, end = row["start"], row["end"]
     row["wall_s"] = None if start is None or end is None else end - start

@@ -72,6 +72,7 @@ def test_two_cases_run_at_once_on_two_ranks(tmp_path, small_pile):
     for c in (a, b):
         assert _summary(Path(c["run_dir"]))["status"] == "complete"
         assert c["unknowns"] > 0 and c["newton"] > 0 and len(c["peak_rss_mb_per_rank"]) == 1
+        assert 0.0 < c["rss_at_start_mb"] <= c["peak_rss_mb_max"]
         assert c["output_days"] == [0.0, 0.5, 2.0] and c["settlement_m"][-1] > 0.0
         assert set(c["head_force_kN"]) == {"1"} and c["layer_friction_kPa"]
     rows = (out / "batch.csv").read_text().splitlines()
