@@ -45,7 +45,7 @@ __all__ = [
 ]
 
 #: Bump whenever the builder changes the mesh it makes for a given spec (invalidates caches).
-BUILDER_VERSION = "pier-2"
+BUILDER_VERSION = "pier-3"
 CACHE_ENV = "PILEGROUP_MESH_CACHE"
 
 

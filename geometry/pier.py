@@ -2,9 +2,10 @@
 
 Construction (gmsh built-in "geo" kernel, lengths in m):
 
-1. **Plan view (z = 0), all quadrilaterals** (:mod:`pilegroup.geometry.plan`): o-grid cells
-   around the piles in the structured region (the cap outline, or the piles plus a margin),
-   an unstructured recombined far field around it.
+1. **Plan view (z = 0), all quadrilaterals** (:mod:`pilegroup.geometry.far_field`): o-grid
+   cells around the piles in the structured region (the cap outline, or the piles plus a
+   margin), an unstructured far field around it meshed once into quadrilaterals; a model of a
+   mirror-symmetric layout is one part and its mirror images.
 2. **Extrusion.** The whole plan is extruded down through every layer boundary, the pile toes
    and the bottom; the structured region is extruded up through the pile tops and the cap top.
    Each slab carries graded element heights (``vertical.py``) and ``recombine=True`` so quads
@@ -26,6 +27,7 @@ from typing import Any
 import gmsh
 import numpy as np
 
+from pilegroup.geometry.far_field import build_plan
 from pilegroup.geometry.groups import (
     BOTTOM,
     CAP,
@@ -45,14 +47,7 @@ from pilegroup.geometry.groups import (
     soil_layer,
     tag_of,
 )
-from pilegroup.geometry.plan import (
-    PlanSurface,
-    build_plan,
-    circumferential_divisions,
-    mesh_plan,
-    set_far_field_size,
-)
-from pilegroup.geometry.plan_reduced import build_reduced_plan
+from pilegroup.geometry.plan import PlanSurface, circumferential_divisions
 from pilegroup.geometry.spec import GeometrySpec
 from pilegroup.geometry.vertical import Segment, vertical_segments
 
@@ -99,6 +94,7 @@ class BuildResult:
     n_vertical_cap: int = 0
     far_field_algorithm: int = 0
     far_field_min_sj: float = float("nan")
+    far_field_pairs: int = 0
     timings: dict[str, float] = field(default_factory=dict)
 
     def to_dict(self) -> dict[str, Any]:
@@ -173,18 +169,20 @@ def build_gmsh_model(spec: GeometrySpec, name: str = "pilegroup") -> BuildResult
     for key, val in GMSH_OPTIONS.items():
         gmsh.option.setNumber(key, val)
     gmsh.model.add(name)
-    surfaces, outline = (build_plan(spec) if spec.symmetry == "none"
-                         else build_reduced_plan(spec))
+    plan = build_plan(spec)
+    surfaces, far = plan.surfaces, plan.far
     vol_group, soil_segs, cap_segs = _extrude_all(spec, surfaces)
     gmsh.model.geo.removeAllDuplicates()
     gmsh.model.geo.synchronize()
-    set_far_field_size(spec, outline)
+    plan.embed()
     cell_groups, facet_groups = _physical_groups(spec, vol_group)
     t1 = time.perf_counter()
 
     res = BuildResult(cell_groups, facet_groups)
-    res.far_field_algorithm, res.far_field_min_sj = mesh_plan(surfaces[-1].tag, spec.sizing.growth)
+    res.far_field_algorithm, res.far_field_min_sj = far.algorithm, far.min_sj
+    res.far_field_pairs = far.pairs
     gmsh.model.mesh.generate(3)
+    plan.check()
     t2 = time.perf_counter()
     res.n_circ = circumferential_divisions(spec)
     res.n_vertical_soil = sum(s.n for s in soil_segs)

@@ -1,4 +1,4 @@
-"""The plan view (z = 0) of the pier builder: o-grid pile cells and the unstructured far field.
+"""The plan view (z = 0) of the pier builder: the recorder of points, curves and blocks, o-grids.
 
 The structured region (the cap outline, or the pile circles' bounding box plus
 ``near_field_margin`` without a cap) is cut into a rectilinear grid of cells, one per pile, with
@@ -7,15 +7,23 @@ an inner square plus four curved blocks, outside it four blocks from the circle 
 sides; every block is transfinite, so pile cross-sections are structured.
 ``N = max(n_circ_min, 4 ceil(pi d / (4 h)))`` edges run around each circle and ``N / 4`` along
 every cell side; the radial edges next to the pile start at ``h`` and grow geometrically towards
-the cell side. Outside the structured region the plan is meshed unstructured (Frontal-Delaunay
-for quads + Blossom recombination), sized by the distance to the region outline, growing by
-``growth`` up to ``h_far``. Lengths in m; gmsh built-in "geo" kernel.
+the cell side (:mod:`pilegroup.geometry.plan_cells` cuts cells at mirror planes,
+:mod:`pilegroup.geometry.far_field` meshes the rest of the plan).
+
+:class:`PlanView` records everything first and emits it into the gmsh built-in "geo" kernel at
+once: a recorded part can be mirrored (``sign``), coincident points and straight curves are
+shared, and a curve can be split into single-edge lines through its nodes after the blocks
+that use it exist (the far field's boundary). Besides transfinite blocks it records *free*
+surfaces whose mesh is given: every node and interior edge of the mesh is embedded in the
+surface (:class:`Embedded`), every boundary edge is a single-edge line, so gmsh's
+triangulation is that of the given quadrilaterals and Blossom recombination restores them
+(the only perfect matching). Lengths in m.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import gmsh
 import numpy as np
@@ -24,24 +32,17 @@ from pilegroup.errors import ScenarioError
 from pilegroup.geometry.spec import GeometrySpec, PileSpec
 
 __all__ = [
-    "FAR_FIELD_ALGORITHMS",
     "CellPiles",
+    "Embedded",
     "PlanSurface",
     "PlanView",
-    "build_plan",
     "cell_grid",
     "circumferential_divisions",
-    "mesh_plan",
     "outline_edge",
     "pile_cell",
     "progression",
     "radial_edges",
-    "set_far_field_size",
 ]
-
-#: gmsh 2D algorithms tried for the far field (6 Frontal-Delaunay, 5 Delaunay, 8 Frontal-Delaunay
-#: for quads), all with Blossom recombination.
-FAR_FIELD_ALGORITHMS = (6, 5, 8)
 
 #: Plan cell (ix, iy) of the structured grid -> index (0-based) of the pile it holds.
 CellPiles = dict[tuple[int, int], int]
@@ -102,62 +103,183 @@ def progression(length: float, first: float, last: float) -> tuple[int, float]:
     return best[1], best[2]
 
 
-class PlanView:
-    """Points, curves and surfaces of the plan view in the geo kernel (shares coincident ones).
+@dataclass
+class _Curve:
+    """A recorded curve: a straight line from point ``p`` to ``q`` or an arc about ``centre``."""
 
-    Transfinite curve counts are collected and set once, after every surface exists.
+    p: int
+    q: int
+    centre: int | None = None
+    n: int = 0
+    coef: float = 1.0
+
+
+@dataclass
+class _Block:
+    """A recorded transfinite, recombined surface."""
+
+    curves: list[int]
+    corners: list[int]
+    pile: int | None
+    in_region: bool
+
+
+@dataclass
+class _Free:
+    """A recorded unstructured, recombined surface whose mesh is fixed by embedded entities."""
+
+    loops: list[list[int]]
+    lines: list[int]
+    points: list[int]
+
+
+@dataclass
+class Embedded:
+    """Curves and points (gmsh tags) to embed in surface ``surface`` once the model is synced."""
+
+    surface: int
+    curves: list[int]
+    points: list[int]
+
+    def embed(self) -> None:
+        """Embed them (the model must be synchronised)."""
+        gmsh.model.mesh.embed(1, self.curves, 2, self.surface)
+        gmsh.model.mesh.embed(0, self.points, 2, self.surface)
+
+
+@dataclass
+class PlanView:
+    """Points, curves and transfinite blocks of the plan view, recorded, then emitted to gmsh.
+
+    Builders work in *part* coordinates; ``sign`` (per axis, +-1) maps them to the model, so
+    the same recording code makes a part and its mirror images. Points are shared within
+    1e-9 x ``scale``, straight curves between the same two points too (a reference is negated
+    when it runs backwards); ``pile_map`` renumbers the piles of a mirrored part (number of
+    the part's pile -> number of its image). Curve ids start at 1.
     """
 
-    def __init__(self, scale: float) -> None:
-        self.scale = scale
-        self.points: dict[tuple[int, int], int] = {}
-        self.lines: dict[tuple[int, int], int] = {}
-        self.coords: dict[int, tuple[float, float]] = {}
-        self.surfaces: list[PlanSurface] = []
-        self.block_curves: list[list[int]] = []
-        self.transfinite: dict[int, tuple[int, float]] = {}
+    scale: float
+    sign: tuple[float, float] = (1.0, 1.0)
+    pile_map: dict[int, int] = field(default_factory=dict)
+    coords: list[tuple[float, float]] = field(default_factory=list)
+    curves: list[_Curve] = field(default_factory=lambda: [_Curve(-1, -1)])
+    blocks: list[_Block] = field(default_factory=list)
+    chains: dict[int, list[int]] = field(default_factory=dict)
+    free: list[_Free] = field(default_factory=list)
+    embedded: list[Embedded] = field(default_factory=list)
+    _points: dict[tuple[int, int], int] = field(default_factory=dict)
+    _lines: dict[tuple[int, int], int] = field(default_factory=dict)
 
     def point(self, x: float, y: float) -> int:
-        """The point at (x, y) m, z = 0 (an existing one within 1e-9 x scale)."""
+        """The point at (x, y) m in part coordinates."""
+        return self.point_at(self.sign[0] * float(x) + 0.0, self.sign[1] * float(y) + 0.0)
+
+    def point_at(self, x: float, y: float) -> int:
+        """The point at (x, y) m in model coordinates (an existing one within the tolerance)."""
         key = (round(x / self.scale * 1e9), round(y / self.scale * 1e9))
-        if key not in self.points:
-            self.points[key] = gmsh.model.geo.addPoint(x, y, 0.0)
-            self.coords[self.points[key]] = (x, y)
-        return self.points[key]
+        if key not in self._points:
+            self._points[key] = len(self.coords)
+            self.coords.append((x, y))
+        return self._points[key]
+
+    def xy(self, p: int) -> tuple[float, float]:
+        """Part coordinates (m) of point ``p``."""
+        x, y = self.coords[p]
+        return self.sign[0] * x + 0.0, self.sign[1] * y + 0.0
 
     def line(self, p: int, q: int) -> int:
         """The straight curve from ``p`` to ``q`` (an existing one, negated when reversed)."""
-        if (p, q) in self.lines:
-            return self.lines[(p, q)]
-        if (q, p) in self.lines:
-            return -self.lines[(q, p)]
-        tag = gmsh.model.geo.addLine(p, q)
-        self.lines[(p, q)] = tag
-        return tag
+        if (p, q) in self._lines:
+            return self._lines[(p, q)]
+        if (q, p) in self._lines:
+            return -self._lines[(q, p)]
+        self.curves.append(_Curve(p, q))
+        self._lines[(p, q)] = len(self.curves) - 1
+        return len(self.curves) - 1
 
     def arc(self, p: int, centre: int, q: int) -> int:
         """A new circle arc from ``p`` to ``q`` about ``centre`` (less than a half circle)."""
-        tag = gmsh.model.geo.addCircleArc(p, centre, q)
-        self.lines[(p, q)] = tag
-        return tag
+        self.curves.append(_Curve(p, q, centre))
+        return len(self.curves) - 1
 
     def edges(self, curve: int, n_edges: int, coef: float = 1.0) -> None:
-        """Make ``curve`` transfinite with ``n_edges`` edges (geometric ratio ``coef``)."""
-        self.transfinite[abs(curve)] = (n_edges, coef)
+        """Mesh ``curve`` with ``n_edges`` edges (geometric ratio ``coef`` along its direction)."""
+        c = self.curves[abs(curve)]
+        c.n, c.coef = n_edges, coef
 
-    def block(self, curves: list[int], corners: list[int], pile: int | None) -> None:
-        """A transfinite, recombined surface bounded by ``curves`` with the 4 ``corners``."""
-        loop = gmsh.model.geo.addCurveLoop(curves, reorient=True)
-        s = gmsh.model.geo.addPlaneSurface([loop])
-        gmsh.model.geo.mesh.setTransfiniteSurface(s, "Left", corners)
-        gmsh.model.geo.mesh.setRecombine(2, s)
-        self.surfaces.append(PlanSurface(s, len(curves), pile, True))
-        self.block_curves.append(list(curves))
+    def block(self, curves: list[int], corners: list[int], pile: int | None,
+              in_region: bool = True) -> None:
+        """A transfinite, recombined surface bounded by ``curves`` with the 4 ``corners``.
 
-    def set_transfinite(self) -> None:
-        """Set every collected transfinite curve in the gmsh model."""
-        for tag, (n, coef) in self.transfinite.items():
-            gmsh.model.geo.mesh.setTransfiniteCurve(tag, n + 1, "Progression", coef)
+        ``pile``: the part's pile number inside a pile (mapped by ``pile_map``), else ``None``.
+        """
+        self.blocks.append(_Block(list(curves), list(corners),
+                                  None if pile is None else self.pile_map.get(pile, pile),
+                                  in_region))
+
+    def free_surface(self, loops: list[list[int]], lines: list[int], points: list[int]) -> None:
+        """A recombined surface with ``lines`` and ``points`` embedded in it.
+
+        ``loops``: its boundary as loops of points joined by their straight lines (recorded
+        already), the outer loop first.
+        """
+        self.free.append(_Free([list(lp) for lp in loops], list(lines), list(points)))
+
+    def split(self, curve: int) -> list[int]:
+        """Make straight, uniform ``curve`` a chain of single-edge lines through its nodes."""
+        c = self.curves[abs(curve)]
+        if c.n == 1:
+            return [curve]
+        if abs(curve) not in self.chains:
+            if c.centre is not None or c.coef != 1.0:
+                raise ValueError(f"curve {curve} is not a uniform straight line")
+            (xp, yp), (xq, yq) = self.coords[c.p], self.coords[c.q]
+            pts = [c.p, *(self.point_at(xp + k / c.n * (xq - xp), yp + k / c.n * (yq - yp))
+                          for k in range(1, c.n)), c.q]
+            chain = [self.line(a, b) for a, b in zip(pts[:-1], pts[1:], strict=True)]
+            for t in chain:
+                self.edges(t, 1)
+            self.chains[abs(curve)] = chain
+        chain = self.chains[abs(curve)]
+        return chain if curve > 0 else [-t for t in reversed(chain)]
+
+    def _expand(self, curves: list[int]) -> list[int]:
+        return [t for c in curves for t in (self.split(c) if abs(c) in self.chains else [c])]
+
+    def emit(self) -> list[PlanSurface]:
+        """Create the recorded points, curves and blocks in the gmsh geo kernel (z = 0)."""
+        geo = gmsh.model.geo
+        used = {p for cid, c in enumerate(self.curves[1:], start=1) if cid not in self.chains
+                for p in (c.p, c.q, c.centre) if p is not None}
+        used.update(p for f in self.free for p in f.points)
+        pt = {p: geo.addPoint(*self.coords[p], 0.0) for p in sorted(used)}  # no orphan point
+        tag: dict[int, int] = {}
+        for cid, c in enumerate(self.curves[1:], start=1):
+            if cid in self.chains:
+                continue
+            if c.n < 1:
+                raise RuntimeError(f"plan curve {cid} has no edge count")
+            tag[cid] = (geo.addLine(pt[c.p], pt[c.q]) if c.centre is None
+                        else geo.addCircleArc(pt[c.p], pt[c.centre], pt[c.q]))
+            geo.mesh.setTransfiniteCurve(tag[cid], c.n + 1, "Progression", c.coef)
+        out = []
+        for b in self.blocks:
+            loop = [tag[c] if c > 0 else -tag[-c] for c in self._expand(b.curves)]
+            s = geo.addPlaneSurface([geo.addCurveLoop(loop, reorient=True)])
+            geo.mesh.setTransfiniteSurface(s, "Left", [pt[c] for c in b.corners])
+            geo.mesh.setRecombine(2, s)
+            out.append(PlanSurface(s, len(loop), b.pile, b.in_region))
+        for f in self.free:
+            loops = [[self.line(a, b) for a, b in zip(lp, [*lp[1:], lp[0]], strict=True)]
+                     for lp in f.loops]
+            s = geo.addPlaneSurface([geo.addCurveLoop([tag[c] if c > 0 else -tag[-c]
+                                                       for c in loop], reorient=True)
+                                     for loop in loops])
+            geo.mesh.setRecombine(2, s)
+            out.append(PlanSurface(s, sum(len(loop) for loop in loops), None, False))
+            self.embedded.append(Embedded(s, [tag[abs(c)] for c in f.lines],
+                                          [pt[p] for p in f.points]))
+        return out
 
 
 def _breaks(vals: list[float], lo: float, hi: float) -> list[float]:
@@ -233,7 +355,7 @@ def pile_cell(pv: PlanView, spec: GeometrySpec, i: int, g: list[int], sides: lis
     sq_sides = [pv.line(sq[k], sq[(k + 1) % 4]) for k in range(4)]
     spokes = [pv.line(sq[k], q[k]) for k in range(4)]
     diags = [pv.line(q[k], g[k]) for k in range(4)]
-    m_in, m_out, coef = radial_edges(spec, p, [pv.coords[t] for t in g], n_circ)
+    m_in, m_out, coef = radial_edges(spec, p, [pv.xy(t) for t in g], n_circ)
     for k in range(4):
         pv.edges(arcs[k], nq)
         pv.edges(sq_sides[k], nq)
@@ -250,56 +372,6 @@ def pile_cell(pv: PlanView, spec: GeometrySpec, i: int, g: list[int], sides: lis
         pv.block([arcs[k], diags[k1], -sides[k], -diags[k]], [q[k], q[k1], g[k1], g[k]], None)
 
 
-def _far_field(pv: PlanView, spec: GeometrySpec, grid: dict[tuple[int, int], int],
-               nxb: int, nyb: int) -> list[int]:
-    """The far field: the block rectangle minus the structured region, one recombined surface.
-
-    The region has ``nxb`` x ``nyb`` cells with corner points ``grid``. Returns its outline.
-    """
-    ring = ([grid[(i, 0)] for i in range(nxb)] + [grid[(nxb, j)] for j in range(nyb)]
-            + [grid[(i, nyb)] for i in range(nxb, 0, -1)]
-            + [grid[(0, j)] for j in range(nyb, 0, -1)])  # counter-clockwise
-    outline = [pv.line(ring[k], ring[(k + 1) % len(ring)]) for k in range(len(ring))]
-    b = spec.block
-    bx, by = b.size_x / 2, b.size_y / 2
-    bc = [pv.point(-bx, -by), pv.point(bx, -by), pv.point(bx, by), pv.point(-bx, by)]
-    blines = [pv.line(bc[k], bc[(k + 1) % 4]) for k in range(4)]
-    for k, ln in enumerate(blines):
-        n = max(2, math.ceil((b.size_x if k % 2 == 0 else b.size_y) / spec.sizing.h_far - 1e-9))
-        gmsh.model.geo.mesh.setTransfiniteCurve(abs(ln), n + 1)
-    outer = gmsh.model.geo.addCurveLoop(blines, reorient=True)
-    inner = gmsh.model.geo.addCurveLoop(outline, reorient=True)
-    far = gmsh.model.geo.addPlaneSurface([outer, inner])
-    gmsh.model.geo.mesh.setRecombine(2, far)
-    pv.surfaces.append(PlanSurface(far, 4 + len(outline), None, False))
-    return outline
-
-
-def build_plan(spec: GeometrySpec) -> tuple[list[PlanSurface], list[int]]:
-    """Create the plan-view surfaces at z = 0 in the current gmsh model.
-
-    Returns the surfaces (the far field last) and the curves of the structured region's outline.
-    """
-    b = spec.block
-    pv = PlanView(max(b.size_x, b.size_y))
-    xb, yb, cell_pile = cell_grid(spec)
-    n_circ = circumferential_divisions(spec)
-    grid = {(i, j): pv.point(xb[i], yb[j]) for i in range(len(xb)) for j in range(len(yb))}
-    for ix in range(len(xb) - 1):
-        for iy in range(len(yb) - 1):
-            g = [grid[(ix + 1, iy + 1)], grid[(ix, iy + 1)], grid[(ix, iy)], grid[(ix + 1, iy)]]
-            sides = [pv.line(g[k], g[(k + 1) % 4]) for k in range(4)]
-            for s in sides:
-                pv.edges(s, n_circ // 4)
-            if (ix, iy) in cell_pile:
-                pile_cell(pv, spec, cell_pile[(ix, iy)], g, sides, n_circ)
-            else:
-                pv.block(sides, g, None)
-    pv.set_transfinite()
-    outline = _far_field(pv, spec, grid, len(xb) - 1, len(yb) - 1)
-    return pv.surfaces, [abs(t) for t in outline]
-
-
 def outline_edge(spec: GeometrySpec) -> float:
     """Mean edge size (m) of the structured region's outline."""
     x0, x1, y0, y1 = spec.structured_region()
@@ -307,53 +379,3 @@ def outline_edge(spec: GeometrySpec) -> float:
     nx = len({round(p.x, 9) for p in spec.piles})
     ny = len({round(p.y, 9) for p in spec.piles})
     return 0.5 * ((x1 - x0) / (nx * nq) + (y1 - y0) / (ny * nq))
-
-
-def set_far_field_size(spec: GeometrySpec, outline: list[int]) -> None:
-    """Background mesh size: the outline edge size growing by ``growth`` up to ``h_far``."""
-    sz = spec.sizing
-    fld = gmsh.model.mesh.field
-    f_dist = fld.add("Distance")
-    fld.setNumbers(f_dist, "CurvesList", outline)
-    fld.setNumber(f_dist, "Sampling", 20)
-    f_math = fld.add("MathEval")
-    edge = outline_edge(spec)
-    fld.setString(f_math, "F", f"Min({sz.h_far}, {edge} + {sz.growth - 1.0}*F{f_dist})")
-    fld.setAsBackgroundMesh(f_math)
-
-
-def mesh_plan(far: int, growth: float) -> tuple[int, float]:
-    """Mesh all surfaces with the far-field algorithm giving the best all-quad plan.
-
-    ``far`` is the far-field surface, ``growth`` the sizing's (named in the error). Returns
-    (algorithm, far-field minimum scaled Jacobian). Raises
-    :class:`~pilegroup.errors.ScenarioError` naming ``numerics.mesh.growth`` when no algorithm
-    recombines the far field into quads: the sizing is one this mesher cannot build (exit 2),
-    which the user fixes by changing it.
-    """
-    best: tuple[float, int] | None = None
-    for alg in FAR_FIELD_ALGORITHMS:
-        gmsh.model.mesh.clear()
-        gmsh.model.mesh.setAlgorithm(2, far, alg)
-        try:
-            gmsh.model.mesh.generate(2)
-        except Exception:  # noqa: BLE001 - an algorithm may refuse a surface; try the next
-            continue
-        types, tags, _ = gmsh.model.mesh.getElements(2, far)
-        if any(t != 3 for t in types):  # 3 = 4-node quadrangle
-            continue
-        q = float(np.min(gmsh.model.mesh.getElementQualities(np.concatenate(tags), "minSJ")))
-        if best is None or q > best[0]:
-            best = (q, alg)
-        if q >= 0.35:
-            break
-    if best is None:
-        raise ScenarioError("numerics.mesh.growth", growth,
-                            "the far field cannot be meshed with quads at this sizing (every "
-                            f"gmsh algorithm {FAR_FIELD_ALGORITHMS} left triangles): change "
-                            "numerics.mesh.growth, far_field_size_m or size_m", "-")
-    if best[1] != alg:
-        gmsh.model.mesh.clear()
-        gmsh.model.mesh.setAlgorithm(2, far, best[1])
-        gmsh.model.mesh.generate(2)
-    return best[1], best[0]

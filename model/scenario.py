@@ -121,6 +121,14 @@ class Scenario:
         if self.piles.embedment_m >= self.cap.thickness_m:
             raise ScenarioError("piles.embedment_m", self.piles.embedment_m,
                                 f"must be < cap.thickness_m = {self.cap.thickness_m:g}", "m")
+        tied = self.interface.mode == "tied"
+        if self.cap.in_contact_with_soil is not None and self.cap.in_contact_with_soil != tied:
+            raise ScenarioError(
+                "cap.in_contact_with_soil", self.cap.in_contact_with_soil,
+                "must follow the interface model (or be left out): with interface.mode = "
+                "'tied' the cap bottom is bonded to the ground (true); with 'elastic' or "
+                "'viscoplastic' the cap is free of the soil (false); a cap-soil interface is "
+                "not modelled", "-")
 
     def _check_stages(self) -> None:
         """One geostatic stage first; load and consolidation stages end by ``time.end_day``."""

@@ -277,10 +277,17 @@ class Piles:
 
 @dataclass(frozen=True)
 class Cap(_PlanRectangle):
-    """Rectangular pile cap centred on the plan origin, bottom on the ground surface."""
+    """Rectangular pile cap centred on the plan origin, bottom on the ground surface.
+
+    ``in_contact_with_soil``: whether the cap bottom is bonded to the ground. It follows the
+    interface model and is checked against it (``Scenario``): tied piles share the soil's
+    displacement field and bond the cap (``true``); piles on their own field joined by the
+    interface law leave the cap free of the soil (``false``, the paper's arrangement); ``None``
+    (absent): whatever the interface model implies.
+    """
 
     thickness_m: float
-    in_contact_with_soil: bool = False
+    in_contact_with_soil: bool | None = None
 
     def __post_init__(self) -> None:
         self._check_plan_size("cap")

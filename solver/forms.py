@@ -10,7 +10,8 @@ units kN, m, day; tension positive; ``p`` excess pore pressure, compression posi
 * mass balance, backward Euler (multiplied by dt):
   ``S (p - p_n) + div(u - u_n) - dt div((k/GAMMA_W) grad p) = 0``, ``S = n / K_w``;
 * pressure stabilisation of Q1-Q1 (Bochev, Dohrmann & Gunzburger 2006; White & Borja 2008):
-  ``tau int (dp - Pi0 dp)(q - Pi0 q)`` as the full-quadrature minus the one-point mass matrix;
+  ``tau int (dp - Pi0 dp)(q - Pi0 q)`` as the full-quadrature minus the one-point mass matrix,
+  ``tau = 3 / (lambda + 2 mu)`` per soil material (:func:`projection_tau`);
 * surface loads: ``int c n . v`` with a Constant pressure per load;
 * interface: the law's effective traction plus the excess pore pressure on the pile surfaces;
 * fixed-stress preconditioning term ``(1/K_dr) M`` on the pressure block.
@@ -57,12 +58,34 @@ class BlockForms:
         self.J[i][j] = form if self.J[i][j] is None else self.J[i][j] + form
 
 
+def projection_tau(K: float, G: float) -> float:
+    """Q1-Q1 stabilisation parameter ``tau = 3 / (lambda + 2 mu) = 3 / (K + 4 G / 3)``, 1/kPa.
+
+    Source: the stabilised linear pair of Aguilar, Gaspar, Lisbona & Rodrigo (Int. J. Numer.
+    Meth. Engng 75, 2008, 1282-1300) and Rodrigo, Gaspar, Hu & Zikatanov (Comput. Methods Appl.
+    Mech. Engrg 298, 2016, 183-204) adds ``beta int grad(p - p_n) . grad q`` to the mass balance
+    with ``beta = h^2 / (4 (lambda + 2 mu))``. In 1D the undrained pressure operator is
+    ``1/(lambda + 2 mu)`` times the one-point mass matrix (the strain is constant per cell);
+    with ``beta`` it becomes ``1/(lambda + 2 mu)`` times the lumped mass matrix, an M-matrix,
+    and the pressure is monotone at any time step. On a trilinear hexahedron (box cell of sides
+    ``h_x, h_y, h_z``) a pressure varying in one direction ``n`` only (the boundary layer at a
+    drained face, the oedometric column) makes the projection term exactly
+    ``tau (h_n^2 / 12) int grad(p - p_n) . grad q``, and with no lateral strain the trilinear
+    problem is that 1D one with the constrained modulus ``lambda + 2 mu``: ``tau h_n^2 / 12 =
+    beta`` gives ``tau = 3 / (lambda + 2 mu)``, with no cell size (the projection carries
+    ``h_n``). Modes varying in two or three directions inside a cell get ``h^2/24`` and
+    ``h^2/36`` of their Laplacian instead (docs/solver.md: derivation and measurements).
+    """
+    return 3.0 / (K + 4.0 * G / 3.0)
+
+
 class Coefficients:
     """Cell-wise (DG0, parent mesh) material coefficients of the soil terms.
 
     ``S`` storage (1/kPa), ``mob`` mobility k/GAMMA_W (m^2/(kPa day)), ``gam`` buoyant unit
     weight (kN/m^3; solids take that of the layer they replace), ``tau`` stabilisation
-    ``stab_factor / (2 G)`` (1/kPa), ``beta`` fixed-stress ``1/K`` (1/kPa).
+    ``stab_factor * projection_tau(K, G)`` (1/kPa), ``beta`` fixed-stress ``1/K`` (1/kPa); the
+    moduli are those of each material's elastic part (the elastic moduli of a plastic soil).
     """
 
     def __init__(self, layout: BlockLayout, disc: Discretisation, column: SoilColumn) -> None:
@@ -79,7 +102,7 @@ class Coefficients:
             self.S.x.array[cells] = mat.storage
             self.mob.x.array[cells] = mat.mobility
             self.gam.x.array[cells] = mat.gamma_sat - GAMMA_W
-            self.tau.x.array[cells] = disc.stab_factor / (2.0 * G)
+            self.tau.x.array[cells] = disc.stab_factor * projection_tau(K, G)
             self.beta.x.array[cells] = 1.0 / K
         self.dt = fem.Constant(mesh, default_scalar_type(0.0))
 
@@ -149,7 +172,11 @@ class FormBuilder:
                          + c.dt * c.mob * ufl.inner(ufl.grad(dp), ufl.grad(q)) * dx)
 
     def stabilisation(self) -> None:
-        """Polynomial pressure projection of the equal-order pair (full minus one-point mass)."""
+        """Polynomial pressure projection of the equal-order pair (full minus one-point mass).
+
+        ``tau int (dp - Pi0 dp)(q - Pi0 q)`` on the soil cells with the cell-wise ``tau`` of
+        :func:`projection_tau` (a monotone 1D pressure in a drained step of any size).
+        """
         lay, tau, q, dp = self.layout, self.coef.tau, self.q, self.dp
         sd = dict(subdomain_data=lay.md.cell_tags, subdomain_id=lay.soil_tags) \
             if lay.has_solids else {}

@@ -154,7 +154,8 @@ class Discretisation:
         pair: ``"Q2Q1"`` (Taylor–Hood on hexahedra, inf-sup stable) or ``"Q1Q1"`` (equal order,
             with the pressure-projection stabilisation when ``stabilise``).
         stabilise: add the Bochev–Dohrmann polynomial-pressure-projection term (Q1Q1 only).
-        stab_factor: multiplies the stabilisation parameter ``tau = 1/(2G)`` (White & Borja 2008).
+        stab_factor: multiplies the stabilisation parameter ``tau = 3 / (lambda + 2 mu)``
+            (:func:`~pilegroup.solver.forms.projection_tau`, docs/solver.md).
     """
 
     pair: Literal["Q2Q1", "Q1Q1"] = "Q2Q1"

@@ -55,6 +55,7 @@ from pilegroup.errors import PilegroupError, ScenarioError
 from pilegroup.fileio import write_json_atomic
 from pilegroup.studies.batch_plan import Plan, ResolvedCase, queue_order, resolve_cases
 from pilegroup.studies.batch_table import RECORD, case_row, counts, is_complete, write_tables
+from pilegroup.studies.interrupt import abort_job
 from pilegroup.studies.run import run_scenario
 
 log = logging.getLogger(__name__)
@@ -142,11 +143,10 @@ def _agree(exc: Exception, group: MPI.Comm, err_comm: MPI.Comm, world: MPI.Comm,
         if time.monotonic() - t0 > AGREE_TIMEOUT_S:
             write_record(run_dir, rc, "failed", start=start, end=time.time(), rank=world.rank,
                          message=f"world rank {world.rank} alone: {text}")
-            print(f"pilegroup: rank {world.rank} of {world.size} failed alone in case "
-                  f"{rc.name!r}: {text}; the other ranks of its group cannot go on, so the "
-                  "batch ends (finished cases stay complete: run the plan again to resume)",
-                  file=sys.stderr, flush=True)
-            world.Abort(1)
+            abort_job(f"pilegroup: rank {world.rank} of {world.size} failed alone in case "
+                      f"{rc.name!r}: {text}; the other ranks of its group cannot go on, so the "
+                      "batch ends (finished cases stay complete: run the plan again to resume)",
+                      1)
         time.sleep(0.05)
     texts = err_comm.allgather((isinstance(exc, PilegroupError), text))
     return next((t for ours, t in texts if ours), texts[0][1])

@@ -26,7 +26,7 @@ from typing import Any
 import numpy as np
 
 from pilegroup.errors import ScenarioError
-from pilegroup.fileio import write_json_atomic, write_text_atomic
+from pilegroup.fileio import read_json, write_json_atomic, write_text_atomic
 from pilegroup.studies.batch_plan import ResolvedCase, scenario_digest
 from pilegroup.studies.rundata import layer_label, layer_series, load_run
 
@@ -42,14 +42,6 @@ SERIES = {"head_force_kN": "head_force_kN[pile {}]",
           "layer_friction_kPa": "shaft_friction_kPa[{}]",
           "layer_relative_displacement_m": "relative_displacement_m[{}]"}
 
-
-def read_json(path: Path) -> dict[str, Any] | None:
-    """A JSON object from ``path``, or ``None`` when missing or unreadable."""
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return None
-    return data if isinstance(data, dict) else None
 
 
 def is_complete(run_dir: Path, digest: str) -> bool:

@@ -7,7 +7,6 @@ line that says why a run failed, and the table of the cases as Markdown and JSON
 
 from __future__ import annotations
 
-import json
 import os
 import signal
 import subprocess
@@ -18,7 +17,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from pilegroup.fileio import write_json_atomic, write_text_atomic
+from pilegroup.fileio import read_json, write_json_atomic, write_text_atomic
 
 #: Environment variables of an MPI launcher (MPICH's Hydra, Open MPI, PMIx). A run started from
 #: a rank of an ``mpirun`` job must not inherit them, or it tries to join that job.
@@ -87,14 +86,6 @@ def error_line(fin: Finished) -> str:
     tagged = [ln for ln in lines if ln.startswith("pilegroup:")]
     return (tagged or lines or ["no output"])[-1]
 
-
-def read_json(path: Path) -> dict[str, Any] | None:
-    """The JSON object in ``path``, or ``None`` when the file is missing or not JSON."""
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return None
-    return data if isinstance(data, dict) else None
 
 
 def markdown_table(rows: Sequence[Mapping[str, Any]], columns: Sequence[str]) -> str:

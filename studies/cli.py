@@ -26,6 +26,7 @@ from pilegroup.fileio import write_text_atomic
 from pilegroup.model import BUNDLED, PilegroupError, ScenarioError, bundled_text, load_scenario
 from pilegroup.model.loader import parse_override
 from pilegroup.studies.cli_batch import COMMANDS as BATCH_COMMANDS
+from pilegroup.studies.interrupt import abort_job
 
 log = logging.getLogger("pilegroup")
 
@@ -206,7 +207,7 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     if args.what == "meshing":
         from pilegroup.geometry.bench import main as bench_main
 
-        return bench_main([str(h) for h in args.sizes] if args.sizes else [])
+        return bench_main([str(h) for h in args.sizes or []] + ["--symmetry", *args.symmetry])
     if args.what == "pier":
         from pilegroup.studies.bench_pier import bench_pier
 
@@ -234,7 +235,8 @@ def _bench_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--out", default=None, help="verification, pier, stability: output folder")
     p.add_argument("--scenario", default="pier667", help="pier: the scenario to run")
     p.add_argument("--symmetry", nargs="*", default=["auto"],
-                   help="pier: the numerics.symmetry values to run (default: auto)")
+                   help="pier, meshing: the numerics.symmetry values to run (default: auto,"
+                   " the part the geometry's symmetry allows)")
     p.add_argument("--ranks", type=int, default=None,
                    help="pier, stability: MPI ranks of each run (default: 2 for pier, 1 for "
                    "stability)")
@@ -339,10 +341,11 @@ def _abort(exc: Exception, verbose: bool) -> int:
     where = f"rank {comm.rank} of {comm.size}" if comm.size > 1 else "run"
     if verbose:
         traceback.print_exc()
-    print(f"pilegroup: {where} failed: {type(exc).__name__}: {exc}", file=sys.stderr,
-          flush=True)
+    line = f"pilegroup: {where} failed: {type(exc).__name__}: {exc}"
     if comm.size > 1:
-        comm.Abort(EXIT_FAILED)
+        abort_job(line, EXIT_FAILED)
+    else:
+        print(line, file=sys.stderr, flush=True)
     return EXIT_FAILED
 
 

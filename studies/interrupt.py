@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import os
 import signal
+import sys
+import time
 from collections.abc import Iterator
 from contextlib import contextmanager
 from types import FrameType
@@ -52,3 +54,17 @@ def stop_on_signals() -> Iterator[None]:
 def signal_name(signum: int) -> str:
     """``"SIGTERM"`` for 15, and so on."""
     return signal.Signals(signum).name
+
+
+#: Seconds the launcher gets to forward a last line before ``MPI_Abort`` kills the job: without
+#: the pause, MPICH's hydra sometimes ends the job before the line has left the rank's pipe.
+FORWARD_PAUSE_S = 1.0
+
+
+def abort_job(line: str, code: int) -> None:
+    """Print ``line`` on stderr, then end every rank of the job with exit ``code``."""
+    from mpi4py import MPI
+
+    print(line, file=sys.stderr, flush=True)
+    time.sleep(FORWARD_PAUSE_S)
+    MPI.COMM_WORLD.Abort(code)

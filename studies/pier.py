@@ -273,7 +273,7 @@ def run_coupled(sc: Scenario, md: MeshData, out: Path, preset: str | None = None
     except StepFailure as exc:
         load = exc.load_factor * sc.total_cap_load()
         msg = (f"no equilibrium beyond load factor {exc.load_factor:.4g} ({load:.6g} kN) at "
-               f"t = {exc.t:.6g} day, stage {exc.stage!r}: {exc}")
+               f"t = {exc.t:.6g} day, {exc}")
         if isinstance(exc.run_log, RunLog):  # the counts and extremes up to the failure
             writer.finish(run_summary(pb, exc.run_log, summary(False) | {"failure": msg}))
         raise StepFailure(msg, exc.t, exc.load_factor, exc.stage, exc.run_log) from exc

@@ -95,36 +95,64 @@ def _verdict(flags: dict[int, bool]) -> str:
     return "no" + (f" (only in layer(s) {', '.join(some)})" if some else "")
 
 
+def friction_change(run: RunData) -> dict[int, tuple[float, float, bool]]:
+    """Soft layers' centre-pile mean friction: (at the end of loading, at the last time, grew).
+
+    Friction in kPa; grew: by more than :data:`REL_TOL` of the larger value.
+    """
+    out: dict[int, tuple[float, float, bool]] = {}
+    series = layer_series(run, "shaft_friction_kPa")
+    for j in SOFT_LAYERS:
+        if j not in series:
+            continue
+        t, v = series[j]
+        f0 = _at(t, v, run.t_load)
+        if f0 is None or run.t_load is None or float(t[-1]) <= run.t_load:
+            continue
+        f1 = float(v[-1])
+        out[j] = (f0, f1, f1 - f0 > REL_TOL * max(abs(f0), abs(f1)))
+    return out
+
+
 def _friction_section(run: RunData) -> list[str]:
     lines = ["### Does shaft friction grow with time in the soft layers?", "",
              "Soft layers 1-3 of Table 1 (clay, mud, mucky clay); layer-mean shaft friction of "
              f"the centre pile (pile {run.centre_pile}, + = soil supports the pile) at the end of "
              "loading against the last output time; growth = an increase above "
              f"{100 * REL_TOL:g} % of the larger value.", ""]
-    series = layer_series(run, "shaft_friction_kPa")
-    rows, flags = [], {}
-    t_last = None
-    for j in SOFT_LAYERS:
-        if j not in series:
-            continue
-        t, v = series[j]
-        f0, t_last = _at(t, v, run.t_load), float(t[-1])
-        if f0 is None or run.t_load is None or t_last <= run.t_load:
-            continue
-        f1 = float(v[-1])
-        flags[j] = f1 - f0 > REL_TOL * max(abs(f0), abs(f1))
-        rows.append(f"| {layer_label(run, j)} | {f0:.3f} | {f1:.3f} | {f1 - f0:+.3f} "
-                    f"| {'yes' if flags[j] else 'no'} |")
-    if not flags:
+    change = friction_change(run)
+    if not change:
         why = ("no end of loading (no `settlement.csv` with a load stage)" if run.t_load is None
                else "no friction data (`layer_history.csv` / `pile_profiles.csv`) for layers "
                     "1-3 of the centre pile from the end of loading to a later time")
         return lines + [f"**Answer: no data** — {why}.", ""]
+    t_last = float(layer_series(run, "shaft_friction_kPa")[next(iter(change))][0][-1])
+    rows = [f"| {layer_label(run, j)} | {f0:.3f} | {f1:.3f} | {f1 - f0:+.3f} "
+            f"| {'yes' if ok else 'no'} |" for j, (f0, f1, ok) in change.items()]
     lines += [f"| layer | f at end of loading, t = {run.t_load:g} d (kPa) "
               f"| f at t = {t_last:g} d (kPa) | change (kPa) | grows |",
               "| --- | ---: | ---: | ---: | --- |", *rows, "",
-              f"**Answer: {_verdict(flags)}.**", ""]
+              f"**Answer: {_verdict({j: c[2] for j, c in change.items()})}.**", ""]
     return lines
+
+
+def relative_rates(run: RunData) -> dict[int, tuple[float, float, float, float, float, bool]]:
+    """Per layer of the centre pile: (w0, w89, w_last, rate early, rate late, early faster).
+
+    Relative displacement (m) at the end of loading, at :data:`EARLY_DAY` and at the last time;
+    the two mean rates (m/day); whether the early rate is the larger.
+    """
+    out: dict[int, tuple[float, float, float, float, float, bool]] = {}
+    t0 = run.t_load
+    for j, (t, v) in layer_series(run, "relative_displacement_m").items():
+        w0, w89 = _at(t, v, t0), _at(t, v, EARLY_DAY)
+        t_last = float(t[-1])
+        if w0 is None or w89 is None or t0 is None or t_last <= EARLY_DAY or t0 >= EARLY_DAY:
+            continue
+        w1 = float(v[-1])
+        r1, r2 = (w89 - w0) / (EARLY_DAY - t0), (w1 - w89) / (t_last - EARLY_DAY)
+        out[j] = (w0, w89, w1, r1, r2, r1 > r2 + REL_TOL * max(abs(r1), abs(r2)))
+    return out
 
 
 def _relative_section(run: RunData) -> list[str]:
@@ -133,34 +161,24 @@ def _relative_section(run: RunData) -> list[str]:
              f"(+ = pile moves down relative to the soil) from the end of loading to "
              f"{EARLY_DAY:g} days against {EARLY_DAY:g} days to the last time; the paper "
              "(Section 2) finds the rate from 0 to 89 days \"much larger\" than later.", ""]
-    note = zero_note(run)
-    if note:
+    if zero_note(run):
         return lines + ["**Answer: not applicable** — every relative displacement is zero "
                         "(tied pile-soil interface).", ""]
-    series = layer_series(run, "relative_displacement_m")
-    rows, flags = [], {}
-    t0, t_last = run.t_load, None
-    for j, (t, v) in series.items():
-        w0, w89 = _at(t, v, t0), _at(t, v, EARLY_DAY)
-        t_last = float(t[-1])
-        if w0 is None or w89 is None or t0 is None or t_last <= EARLY_DAY or t0 >= EARLY_DAY:
-            continue
-        w1 = float(v[-1])
-        r1, r2 = (w89 - w0) / (EARLY_DAY - t0), (w1 - w89) / (t_last - EARLY_DAY)
-        flags[j] = r1 > r2 + REL_TOL * max(abs(r1), abs(r2))
-        rows.append(f"| {layer_label(run, j)} | {1000 * w0:.3f} | {1000 * w89:.3f} "
-                    f"| {1000 * w1:.3f} | {1000 * r1:.5f} | {1000 * r2:.5f} "
-                    f"| {'yes' if flags[j] else 'no'} |")
-    if not flags:
+    rates, t0 = relative_rates(run), run.t_load
+    if not rates:
         why = ("no end of loading (no `settlement.csv` with a load stage)" if t0 is None
                else f"no relative displacement data of the centre pile spanning the end of "
                     f"loading, {EARLY_DAY:g} days and a later time")
         return lines + [f"**Answer: no data** — {why}.", ""]
+    t_last = float(layer_series(run, "relative_displacement_m")[next(iter(rates))][0][-1])
+    rows = [f"| {layer_label(run, j)} | {1000 * w0:.3f} | {1000 * w89:.3f} "
+            f"| {1000 * w1:.3f} | {1000 * r1:.5f} | {1000 * r2:.5f} "
+            f"| {'yes' if ok else 'no'} |" for j, (w0, w89, w1, r1, r2, ok) in rates.items()]
     lines += [f"| layer | w at t = {t0:g} d (mm) | w at {EARLY_DAY:g} d (mm) "
               f"| w at {t_last:g} d (mm) | rate {t0:g}-{EARLY_DAY:g} d (mm/day) "
               f"| rate {EARLY_DAY:g}-{t_last:g} d (mm/day) | faster early |",
               "| --- | ---: | ---: | ---: | ---: | ---: | --- |", *rows, "",
-              f"**Answer: {_verdict(flags)}.**", ""]
+              f"**Answer: {_verdict({j: r[5] for j, r in rates.items()})}.**", ""]
     return lines
 
 

@@ -1,10 +1,13 @@
 """Symmetry-reduced models: the kept half or quarter against the full model with the same sizing.
 
-Every cell group of a reduced mesh must hold exactly its share of the full mesh's volume (soil
-and cap 1/2 or 1/4, each kept pile its meshed fraction), every facet group its share of the
-area (an interface group of a cut pile: its fraction), to 1e-9 relative: a cut pile is the
-exact half (quarter) of the full model's polygonal pile, also when N / 4 is odd (Pier 667,
-N = 28). Specs, resolution and errors need no mesh.
+The full model of a mirror-symmetric layout is made of the reduced part and its mirror images,
+so the reduced mesh is the full mesh's restriction: the same vertices and cells, bit for bit
+(exact mirror copies make the full mesh exactly symmetric), and every cell group holds exactly
+its share of the full mesh's volume (soil and cap 1/2 or 1/4, each kept pile its meshed
+fraction), every facet group its share of the area (an interface group of a cut pile: its
+fraction), to 1e-9 relative: a cut pile is the exact half (quarter) of the full model's
+polygonal pile, also when N / 4 is odd (Pier 667, N = 28). Specs, resolution and errors need
+no mesh.
 """
 
 import dataclasses
@@ -186,9 +189,54 @@ def test_exterior_is_tagged_and_all_hexahedra(case):
 def test_pier_quarter_is_a_quarter_of_the_cells(built):
     _, full, _ = built("pier", "none")
     spec, quarter, _ = built("pier", "quarter")
+    _, half, _ = built("pier", "half_y")
     assert spec.kept_piles() == (5, 6, 8, 9)
-    n_full, n_quarter = full.info["num_cells"], quarter.info["num_cells"]
-    assert 0.25 * n_full < n_quarter < 0.3 * n_full
+    n_full = full.info["num_cells"]
+    assert 4 * quarter.info["num_cells"] == 2 * half.info["num_cells"] == n_full
+
+
+def _kept(spec, x):
+    """Rows of the points ``x`` (n, 3) on the kept side of ``spec``'s planes (on them too)."""
+    keep = np.ones(len(x), dtype=bool)
+    for k, axis in enumerate(("x", "y")):
+        if axis in spec.cut_planes():
+            keep &= x[:, k] >= 0.0
+    return x[keep]
+
+
+def _sorted_rows(x):
+    return x[np.lexsort(x.T[::-1])]
+
+
+def _cells(md):
+    """Every owned cell as (its 8 corner coordinates sorted, flattened) -> its cell tag."""
+    tags = _cell_tags(md)
+    corners = mc.cell_coords(md.mesh)
+    return {tuple(_sorted_rows(c).ravel()): int(t) for c, t in zip(corners, tags, strict=False)}
+
+
+def test_reduced_mesh_is_the_full_mesh_on_its_side(case):
+    """The reduced model is the full model's part and the full model the part's mirror images:
+    the same vertices and cells (with their groups), bit for bit, on the kept side."""
+    (_, full, _), (spec, red, _) = case
+    xf, xr = full.mesh.geometry.x, red.mesh.geometry.x
+    assert np.array_equal(_sorted_rows(_kept(spec, xf)), _sorted_rows(xr))
+    cells_full, cells_red = _cells(full), _cells(red)
+    assert len(cells_red) * 2 ** len(spec.cut_planes()) == len(cells_full)
+    names_full = {t: n for n, t in full.cell_names.items()}
+    names_red = {t: n for n, t in red.cell_names.items()}
+    assert {k: names_red[t] for k, t in cells_red.items()} == {
+        k: names_full[cells_full[k]] for k in cells_red}
+
+
+def test_full_mesh_is_mirror_symmetric(case):
+    (spec, full, _), _ = case
+    x = full.mesh.geometry.x
+    for k, axis in enumerate(("x", "y")):
+        if axis in spec.symmetry_planes():
+            m = x.copy()
+            m[:, k] = -m[:, k] + 0.0
+            assert np.array_equal(_sorted_rows(m), _sorted_rows(x)), axis
 
 
 def test_pier_kept_piles_fractions_and_mirror_images():

@@ -233,3 +233,18 @@ def test_geometry_adapter_reproduces_bundled_pier():
     assert g.symmetry == "quarter"  # numerics.symmetry = "auto" (the default)
     assert [lay.thickness for lay in g.layers] == [lay.thickness for lay in ref.layers]
     assert geometry_spec(load_scenario("pier667"), mesh_size=0.3).sizing.h_pile == 0.3
+
+
+@pytest.mark.parametrize("mode, contact", [("tied", False), ("viscoplastic", True),
+                                           ("elastic", True)])
+def test_cap_contact_that_contradicts_the_interface_model_is_invalid(mode, contact):
+    with pytest.raises(ScenarioError, match="cap.in_contact_with_soil"):
+        load_scenario("pier667", {"interface.mode": mode, "cap.in_contact_with_soil": contact})
+
+
+@pytest.mark.parametrize("mode, contact", [("tied", True), ("viscoplastic", False),
+                                           ("tied", None)])
+def test_cap_contact_that_follows_the_interface_model_is_valid(mode, contact):
+    sets = {"interface.mode": mode} | ({} if contact is None else
+                                       {"cap.in_contact_with_soil": contact})
+    assert load_scenario("pier667", sets).cap.in_contact_with_soil is contact

@@ -47,3 +47,17 @@ def test_normal_install_imports_every_subpackage(tmp_path):
     assert out["pier667"] == "9"
     for s in SUBPACKAGES:
         assert out[s].startswith(str(target)), (s, out[s])
+
+
+def test_atomic_files_get_the_usual_permissions(tmp_path):
+    """Run outputs are readable by others like any file the user creates (umask applies)."""
+    import os
+
+    from pilegroup.fileio import write_text_atomic
+
+    old = os.umask(0o022)
+    try:
+        path = write_text_atomic(tmp_path / "a.csv", "x\n")
+    finally:
+        os.umask(old)
+    assert path.stat().st_mode & 0o777 == 0o644

@@ -1,13 +1,17 @@
 """A symmetric 3 x 3 group without a cap: the quarter model gives the full model's answers.
 
 The centre pile is cut into a quarter, the four edge piles into halves; every pile of the
-foundation is reported. The two meshes differ in the unstructured far field, so the answers
-agree to discretisation accuracy, not to round-off. Tolerances: every pile's head force within
-0.5 %, the centre pile's friction and axial-force profiles within 1 % of the profile's maximum
-(as for Pier 667); the settlement within 0.5 %: on this coarse test mesh (h = 1 m, 8 edges
-around a pile, far field 2 m) quarter and full differ by 0.25 % (measured), on the bundled
-single-pile sizing (h = 0.5 m) by 0.08 %, while the coarse mesh's own discretisation error is
-about 5 % (far field 8 m vs 2 m). The quarter runs serially and under ``mpirun -n 2``.
+foundation is reported. The full mesh is the quarter mesh and its mirror images (the same
+nodes and cells on the quarter's side, tests/geometry/test_symmetry.py), so the two models
+differ only by the symmetry conditions and agree to the solver's accuracy, not to a
+discretisation error: the settlement, every pile's head force and the centre pile's axial
+force profile within 1e-6 relative (Newton stops at 1e-9 of the residual, the CSV files keep
+9 significant digits; measured: equal to the last printed digit), far below the 0.2 % a
+reduced model is allowed. The centre pile's friction profile too, except at the toe: the nodes
+of the toe ring also carry the base's material point, whose first shear component is along x
+(the base frame of solver/interface.py), and a quarter ring's mean of it is not the full
+ring's; that station keeps a 1 % bound (measured 0.13 % at day 2). The quarter runs serially
+and under ``mpirun -n 2``.
 """
 
 import csv
@@ -44,7 +48,7 @@ def _compare(full: Path, reduced: Path) -> None:
     w_full = [float(r["settlement_m"]) for r in _rows(full / "settlement.csv")]
     w_red = [float(r["settlement_m"]) for r in _rows(reduced / "settlement.csv")]
     assert len(w_full) == len(w_red) == 3
-    np.testing.assert_allclose(w_red[1:], w_full[1:], rtol=5e-3)
+    np.testing.assert_allclose(w_red[1:], w_full[1:], rtol=1e-6)
     loads = {(r["t_day"], r["pile"]): float(r["head_force_kN"])
              for r in _rows(full / "pile_loads.csv")}
     red = {(r["t_day"], r["pile"]): float(r["head_force_kN"])
@@ -52,7 +56,7 @@ def _compare(full: Path, reduced: Path) -> None:
     assert red.keys() == loads.keys() and {k[1] for k in loads} == {str(i) for i in range(1, 10)}
     for k, v in loads.items():
         if float(k[0]) > 0:
-            assert red[k] == pytest.approx(v, rel=5e-3), k
+            assert red[k] == pytest.approx(v, rel=1e-6), k
     for col in ("shaft_friction_kPa", "axial_force_kN"):
         prof = {}
         for name, folder in (("full", full), ("quarter", reduced)):
@@ -62,7 +66,10 @@ def _compare(full: Path, reduced: Path) -> None:
                           np.array([float(r[col]) for r in rows]))
         (z0, v0), (z1, v1) = prof["full"], prof["quarter"]
         np.testing.assert_allclose(z1, z0, atol=1e-9)
-        assert np.max(np.abs(v1 - v0)) <= 1e-2 * np.max(np.abs(v0)), col
+        toe = z0 == z0.max() if col == "shaft_friction_kPa" else np.zeros(z0.size, dtype=bool)
+        scale = np.max(np.abs(v0))
+        assert np.max(np.abs(v1 - v0)[~toe]) <= 1e-6 * scale, col
+        assert np.all(np.abs(v1 - v0)[toe] <= 1e-2 * np.abs(v0[toe])), col
 
 
 @pytest.fixture(scope="module")

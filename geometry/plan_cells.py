@@ -1,49 +1,40 @@
-"""The plan view (z = 0) of a symmetry-reduced model: the kept half or quarter of the full plan.
+"""The structured cells of a plan part: whole, or cut at the mirror planes x = 0 / y = 0.
 
-The full model's structured grid (:func:`~pilegroup.geometry.plan.cell_grid`) is computed
-first. Cells in the kept part (x >= 0 for the plane x = 0, y >= 0 for y = 0) are built exactly
-as in the full model; cells wholly on the other side are dropped; a cell that straddles a plane
-is centred on it (the grid of a symmetric layout is symmetric) and is split along it:
+A *part* of the plan is what a model cut at ``planes`` keeps (x >= 0 for the plane x = 0,
+y >= 0 for y = 0; the whole plan for no plane). The whole model's structured grid
+(:func:`~pilegroup.geometry.plan.cell_grid`) is computed first. Cells in the part are built as
+o-grids (:func:`~pilegroup.geometry.plan.pile_cell`); cells wholly on the other side of a plane
+are dropped; a cell that straddles a plane is centred on it (the grid of a symmetric layout is
+symmetric) and is split along it:
 
 * its o-grid quadrants whose middle direction lies on the plane (top and bottom for x = 0, left
   and right for y = 0) are halved by a radial node line from the inner square through the pile
   surface to the cell side; the other quadrants are kept or dropped whole;
 * the inner square (and a cell without a pile) is cut along its mid-line.
 
-Every curve keeps the full model's edges: a quadrant of ``nq = N / 4`` edges halves into
-``nq / 2`` edges when ``nq`` is even (the plane is a node line of the full o-grid). When ``nq``
-is odd the plane runs through the middle of the full model's middle edge: the half keeps
-``(nq - 1) / 2`` full edges plus one half edge at the plane, and on the pile surface the node on
-the plane is the midpoint of the full model's chord, so the cut pile cross-section is exactly
-half (a quarter) of the full model's N-gon. Curves on a plane lie exactly on it (their
-coordinate normal to it is 0.0), so every mesh node on them does too.
+Every curve keeps the uncut o-grid's edges: a quadrant of ``nq = N / 4`` edges halves into
+``nq / 2`` edges when ``nq`` is even (the plane is a node line of the uncut o-grid). When ``nq``
+is odd the plane runs through the middle of the uncut o-grid's middle edge: the half keeps
+``(nq - 1) / 2`` whole edges plus one half edge at the plane, and on the pile surface the node on
+the plane is the midpoint of the uncut N-gon's chord, so the cut pile cross-section is exactly
+half (a quarter) of the N-gon. Curves on a plane lie exactly on it (their coordinate normal to
+it is 0.0), so every mesh node on them does too.
 
-The far field is the kept part of the block minus the kept structured region: one surface whose
-boundary runs along the block sides, the planes (geometric edges from the structured region
-outwards) and the structured outline; its edge count is made even for an all-quad mesh.
+A whole model of a mirror-symmetric layout is made of its part and the part's mirror images
+(:mod:`pilegroup.geometry.far_field`), which share the curves on the planes.
 """
 
 from __future__ import annotations
 
 import math
 from collections import Counter
+from collections.abc import Sequence
 
-import gmsh
-
-from pilegroup.geometry.plan import (
-    PlanSurface,
-    PlanView,
-    cell_grid,
-    circumferential_divisions,
-    outline_edge,
-    pile_cell,
-    progression,
-    radial_edges,
-)
+from pilegroup.geometry.plan import PlanView, cell_grid, pile_cell, radial_edges
 from pilegroup.geometry.spec import GeometrySpec
 from pilegroup.geometry.symmetry import TOL
 
-__all__ = ["build_reduced_plan"]
+__all__ = ["outline", "structured_cells"]
 
 _S = math.sqrt(0.5)
 #: Quadrants of the o-grid's corner radials (k = 0..3, counter-clockwise from the top right)
@@ -60,7 +51,7 @@ def _reverse(path: list[int]) -> list[int]:
 def _straight(pv: PlanView, a: int, b: int, n: int, half: bool) -> list[int]:
     """Curves from point ``a`` to ``b``: a side of ``n`` edges, or half of one.
 
-    ``half``: ``a`` is a node of the full model, ``b`` the side's midpoint on a plane; for odd
+    ``half``: ``a`` is a node of the uncut side, ``b`` the side's midpoint on a plane; for odd
     ``n`` the half edge is the one at ``b``.
     """
     if not half or n % 2 == 0:
@@ -68,7 +59,7 @@ def _straight(pv: PlanView, a: int, b: int, n: int, half: bool) -> list[int]:
         pv.edges(line, n // 2 if half else n)
         return [line]
     j = n // 2
-    (xa, ya), (xb, yb) = pv.coords[a], pv.coords[b]
+    (xa, ya), (xb, yb) = pv.xy(a), pv.xy(b)
     f = 2 * j / n
     t = pv.point(xa + f * (xb - xa), ya + f * (yb - ya))
     first, last = pv.line(a, t), pv.line(t, b)
@@ -93,10 +84,10 @@ class _CutPile:
         self.cy = 0.0 if cut[1] else p.y
         self.r = p.radius
         self.a = 0.6 * p.radius * _S  # half side of the inner square
-        self.m_in, self.m_out, self.coef = radial_edges(spec, p, [pv.coords[t] for t in g],
+        self.m_in, self.m_out, self.coef = radial_edges(spec, p, [pv.xy(t) for t in g],
                                                         n_circ)
         self.centre = pv.point(self.cx, self.cy)
-        # on an odd quadrant the node on the plane is the midpoint of the full model's chord
+        # on an odd quadrant the node on the plane is the midpoint of the uncut N-gon's chord
         self.r_mid = self.r if self.nq % 2 == 0 else self.r * math.cos(math.pi / n_circ)
 
     def at(self, dx: float, dy: float) -> int:
@@ -114,7 +105,7 @@ class _CutPile:
             dx, dy = _MIDDLE[k]
             s, q = self.at(self.a * dx, self.a * dy), self.at(self.r_mid * dx, self.r_mid * dy)
             # the middle of cell side k (from corner k to k + 1), on the plane
-            gx, gy = pv.coords[self.g[k]]
+            gx, gy = pv.xy(self.g[k])
             g = pv.point(0.0 if dx == 0.0 else gx, 0.0 if dy == 0.0 else gy)
         else:
             dx, dy = _CORNER[k]
@@ -220,9 +211,9 @@ def _snap(values: list[float], cut: bool) -> list[float]:
     return [0.0 if cut and abs(v) <= TOL else v for v in values]
 
 
-def _structured(pv: PlanView, spec: GeometrySpec, n_circ: int) -> None:
-    """The blocks of the kept structured region."""
-    planes = spec.cut_planes()
+def structured_cells(pv: PlanView, spec: GeometrySpec, planes: Sequence[str],
+                     n_circ: int) -> None:
+    """Record the blocks of the structured region of the part cut at ``planes`` in ``pv``."""
     xb, yb, cell_pile = cell_grid(spec)
     xb, yb = _snap(xb, "x" in planes), _snap(yb, "y" in planes)
     nq = n_circ // 4
@@ -252,89 +243,17 @@ def _structured(pv: PlanView, spec: GeometrySpec, n_circ: int) -> None:
                 pile_cell(pv, spec, i, g, sides, n_circ)
 
 
-def _loop(curves: list[int], ends: dict[int, tuple[int, int]]) -> list[int]:
-    """``curves`` (positive tags) ordered and signed into one closed loop."""
-    links: dict[int, list[tuple[int, int]]] = {}
-    for c in curves:
-        p, q = ends[c]
-        links.setdefault(p, []).append((c, q))
-        links.setdefault(q, []).append((-c, p))
-    start = ends[curves[0]][0]
-    out, at = [], start
-    while True:
-        c, nxt = next((c, n) for c, n in links[at] if not out or abs(c) != abs(out[-1]))
-        out.append(c)
-        at = nxt
-        if at == start:
-            break
-    if len(out) != len(curves):
-        raise RuntimeError(f"far-field boundary is not one loop ({len(out)} of {len(curves)} "
-                           "curves)")
-    return out
+def outline(pv: PlanView, first_block: int, planes: Sequence[str]) -> list[int]:
+    """Curves of the outline of the structured blocks recorded from ``first_block`` on.
 
-
-def _far_field(pv: PlanView, spec: GeometrySpec) -> list[int]:
-    """The far field of the kept part: one recombined surface, appended to ``pv.surfaces``.
-
-    Returns the structured outline (the curves the far field shares with the blocks).
+    The curves one of those blocks uses and no other, except those on a plane in ``planes``:
+    the boundary the part's structured region shares with its far field.
     """
-    planes = spec.cut_planes()
-    ends = {tag: pq for pq, tag in pv.lines.items()}
-    use = Counter(abs(c) for curves in pv.block_curves for c in curves)
+    use = Counter(abs(c) for b in pv.blocks[first_block:] for c in b.curves)
 
-    def on_plane(tag: int) -> bool:
-        (xp, yp), (xq, yq) = (pv.coords[t] for t in ends[tag])
+    def on_plane(curve: int) -> bool:
+        c = pv.curves[curve]
+        (xp, yp), (xq, yq) = pv.coords[c.p], pv.coords[c.q]
         return ("x" in planes and xp == 0.0 == xq) or ("y" in planes and yp == 0.0 == yq)
 
-    outline = sorted(t for t, n in use.items() if n == 1 and not on_plane(t))
-    bx0, bx1, by0, by1 = spec.plan_bounds()
-    sx0, sx1, sy0, sy1 = spec.structured_region()
-    sx0, sy0 = (0.0 if "x" in planes else sx0), (0.0 if "y" in planes else sy0)
-    # the planes from the structured region out to the block sides: edges grow geometrically
-    rays = []
-    if "x" in planes:
-        rays += [((0.0, sy1), (0.0, by1))] + ([] if "y" in planes else [((0.0, sy0), (0.0, by0))])
-    if "y" in planes:
-        rays += [((sx1, 0.0), (bx1, 0.0))] + ([] if "x" in planes else [((sx0, 0.0), (bx0, 0.0))])
-    sz = spec.sizing
-    edge = outline_edge(spec)
-    extra = []
-    for a, b in rays:
-        ray = pv.line(pv.point(*a), pv.point(*b))
-        pv.edges(ray, *progression(math.dist(a, b), edge, sz.h_far))
-        extra.append(ray)
-    corners = [(bx0, by0), (bx1, by0), (bx1, by1), (bx0, by1)]
-    sides = []
-    for k in range(4):
-        if (k == 0 and "y" in planes) or (k == 3 and "x" in planes):
-            continue  # on a plane: the rays and the structured region cover it
-        a, b = corners[k], corners[(k + 1) % 4]
-        side = pv.line(pv.point(*a), pv.point(*b))
-        pv.edges(side, max(2, math.ceil(math.dist(a, b) / sz.h_far - 1e-9)))
-        sides.append((math.dist(a, b), side))
-    total = sum(pv.transfinite[abs(c)][0] for c in [*outline, *extra, *(s for _, s in sides)])
-    if total % 2:  # an odd boundary leaves a triangle in the recombined far field
-        _, longest = max(sides)
-        pv.edges(longest, pv.transfinite[longest][0] + 1)
-    ends = {tag: pq for pq, tag in pv.lines.items()}
-    loop = _loop([*outline, *extra, *(s for _, s in sides)], ends)
-    far = gmsh.model.geo.addPlaneSurface([gmsh.model.geo.addCurveLoop(loop, reorient=True)])
-    gmsh.model.geo.mesh.setRecombine(2, far)
-    pv.surfaces.append(PlanSurface(far, len(loop), None, False))
-    return outline
-
-
-def build_reduced_plan(spec: GeometrySpec) -> tuple[list[PlanSurface], list[int]]:
-    """Create the plan-view surfaces at z = 0 of a reduced ``spec`` in the current gmsh model.
-
-    ``spec.symmetry`` is not "none". Returns the surfaces (the far field last) and the curves
-    of the structured region's outline off the planes (as
-    :func:`~pilegroup.geometry.plan.build_plan`).
-    """
-    b = spec.block
-    pv = PlanView(max(b.size_x, b.size_y))
-    n_circ = circumferential_divisions(spec)
-    _structured(pv, spec, n_circ)
-    outline = _far_field(pv, spec)
-    pv.set_transfinite()
-    return pv.surfaces, outline
+    return sorted(t for t, n in use.items() if n == 1 and not on_plane(t))
