@@ -247,7 +247,7 @@ class LinearSolver:
         self.comm, self.prefix, self.A = comm, prefix, A
         self.P: PETSc.Mat | None = None
         self._fieldsplit_data = fieldsplit_data
-        self.refactorisations = 0  # LU factorisations (direct presets)
+        self.refactorisations = 0  # LU factorisations; preconditioner set-ups (field splits)
         self._new_matrix = True
         self.fallbacks: list[str] = []
         self.ksp: PETSc.KSP | None = None
@@ -323,8 +323,9 @@ class LinearSolver:
             self._set_reuse(False)  # stale factorisation: refactor and solve again
             self.ksp.solve(rhs, sol)
         its = check_reason(self.ksp, "Newton correction")
-        if not limit and self._new_matrix and self.spec.options.get("pc_type") == "lu":
-            self.refactorisations += 1  # preonly LU factors every new matrix once
+        if not limit and self._new_matrix and (self.spec.fieldsplit
+                                               or self.spec.options.get("pc_type") == "lu"):
+            self.refactorisations += 1  # LU (of the blocks) and AMG set up once per matrix
         self._new_matrix = False
         if limit:
             if not self._reusing:
