@@ -209,7 +209,7 @@ class LinearSolver:
     the pier system); a failing ``fieldsplit_gamg`` falls back to ``direct_reuse``.
     """
 
-    preset: Literal["auto", "direct", "direct_reuse", "fieldsplit_gamg"] = "auto"
+    preset: Literal["auto", "direct", "direct_reuse", "fieldsplit_gamg", "fieldsplit_pier"] = "auto"
     options: dict[str, str | int | float | bool] = field(default_factory=dict)
 
 

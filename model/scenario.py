@@ -157,8 +157,17 @@ class Scenario:
                 t = until
 
     def _check_interfaces(self) -> None:
-        """Every layer the piles cross has interface parameters, unless the piles are tied."""
+        """Every layer the piles cross has interface parameters, unless the piles are tied.
+
+        The ``fieldsplit_pier`` solver preset splits the structure from the soil and so needs
+        piles joined to the soil by the interface.
+        """
         if self.interface.mode == "tied":
+            if self.numerics.solver.preset == "fieldsplit_pier":
+                raise ScenarioError("numerics.solver.preset", "fieldsplit_pier",
+                                    "needs interface.mode 'elastic' or 'viscoplastic' (the piles"
+                                    " as a body of their own); with tied piles: 'auto', 'direct',"
+                                    " 'direct_reuse' or 'fieldsplit_gamg'")
             return
         for i, layer in enumerate(self.layers):
             if layer.interface is None and self.layer_top(i) < self.piles.length_in_soil_m:

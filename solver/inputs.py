@@ -206,8 +206,11 @@ class SolverOptions:
     """Linear solver: a named preset of PETSc options merged with overrides.
 
     Attributes:
-        preset: ``"direct"`` (MUMPS LU) or ``"fieldsplit_gamg"`` (FGMRES + fixed-stress
-            block Gauss–Seidel, GAMG with rigid-body near-nullspace on u).
+        preset: a name of :data:`~pilegroup.solver.linsolve.PRESETS`: ``"direct"`` (MUMPS
+            LU), ``"direct_reuse"`` (GMRES on a kept LU), ``"fieldsplit_gamg"`` (FGMRES +
+            fixed-stress block Gauss–Seidel, GAMG with rigid-body near-nullspace on u) or
+            ``"fieldsplit_pier"`` (FGMRES + pressure / structure with the interface soil
+            nodes / soil block Gauss–Seidel, for piles joined by the interface).
         overrides: extra PETSc options (without prefix), applied after the preset.
         prefix: PETSc options prefix of this problem.
         newton: Newton settings.

@@ -334,21 +334,102 @@ class BlockLayout:
                         for i in range(len(self.fields))])
         return np.sqrt(self.comm.allreduce(loc, op=MPI.SUM))
 
-    def index_sets(self, A: PETSc.Mat) -> tuple[PETSc.IS, PETSc.IS]:
-        """Displacement and pressure index sets of the monolithic matrix ``A``."""
+    # ------------------------------------------------------------------ solver splits
+    def _block_offsets(self, A: PETSc.Mat) -> np.ndarray:
+        """Global first row of every block's owned rows in ``A`` (and the end of the last)."""
         sizes = [f.function_space.dofmap.index_map.size_local
                  * f.function_space.dofmap.index_map_bs for f in self.fields]
-        offs = A.getOwnershipRange()[0] + np.concatenate([[0], np.cumsum(sizes)])
-        u_rows = np.concatenate([np.arange(offs[i], offs[i + 1]) for i in self.u_blocks])
-        is_u = PETSc.IS().createGeneral(u_rows.astype(PETSc.IntType), comm=self.comm)
-        is_p = PETSc.IS().createStride(sizes[1], first=int(offs[1]), step=1, comm=self.comm)
-        is_u.setBlockSize(3)
-        return is_u, is_p
+        return A.getOwnershipRange()[0] + np.concatenate([[0], np.cumsum(sizes)])
 
-    def rigid_body_modes(self) -> PETSc.NullSpace:
-        """Six rigid-body modes of the displacement blocks as a PETSc near-nullspace."""
-        x = np.concatenate([b.V.tabulate_dof_coordinates()[:b.V.dofmap.index_map.size_local]
-                            for b in self.bodies])
+    def index_sets(self, A: PETSc.Mat) -> tuple[PETSc.IS, PETSc.IS]:
+        """Displacement and pressure index sets of the monolithic matrix ``A``."""
+        offs = self._block_offsets(A)
+        u_rows = np.concatenate([np.arange(offs[i], offs[i + 1]) for i in self.u_blocks])
+        is_p = PETSc.IS().createStride(int(offs[2] - offs[1]), first=int(offs[1]), step=1,
+                                       comm=self.comm)
+        return self._rows_is(u_rows), is_p
+
+    def splits(self, A: PETSc.Mat, names: tuple[str, ...]
+               ) -> list[tuple[str, PETSc.IS, PETSc.NullSpace | None]]:
+        """Index sets of the field-split blocks ``names`` of ``A`` (``linsolve.Preset.splits``).
+
+        ``"u"`` (every displacement, with the rigid-body modes), ``"p"`` (pressure),
+        ``"structure"`` and ``"soil"`` (:meth:`interface_index_sets`; the soil with its modes);
+        each as ``(name, index set, near-nullspace or None)`` (collective).
+        """
+        known = ("u", "p", "structure", "soil")
+        if any(n not in known for n in names):
+            raise SolverInputError(f"field-split blocks {names}; allowed: {known}")
+        is_u, is_p = self.index_sets(A)
+        sets: dict[str, tuple[PETSc.IS, PETSc.NullSpace | None]] = {"p": (is_p, None)}
+        if "u" in names:
+            sets["u"] = (is_u, self.rigid_body_modes())
+        if "structure" in names or "soil" in names:
+            is_t, is_s, nns = self.interface_index_sets(A)
+            sets["structure"], sets["soil"] = (is_t, None), (is_s, nns)
+        return [(n, *sets[n]) for n in names]
+
+    def interface_soil_nodes(self) -> np.ndarray:
+        """Owned soil displacement nodes on the pile–soil interface (local numbering, sorted).
+
+        The soil nodes of the interface facet groups (shafts and pile bases,
+        :func:`~pilegroup.geometry.groups.is_interface`), marked by every rank that holds such a
+        facet and summed onto the node's owner, so a node whose interface facets lie on other
+        ranks is found too and a rank without interface facets has none (collective).
+        """
+        if self.split is None:
+            raise SolverInputError("the soil/structure index sets need separate soil and "
+                                   "structure bodies (interface coupling); the piles are tied")
+        soil = self.body("soil")
+        names = sorted(n for n in self.md.facet_names if groups.is_interface(n))
+        facets = np.unique(np.concatenate([self.facets(n) for n in names]
+                                          + [np.zeros(0, np.int32)])).astype(np.int32)
+        fdim = self.mesh.topology.dim - 1
+        nodes = fem.locate_dofs_topological(soil.V, fdim, self.sub_facets(soil, facets))
+        imap = soil.V.dofmap.index_map
+        mark = la.vector(imap, bs=1, dtype=np.float64)
+        mark.array[:] = 0.0
+        mark.array[nodes] = 1.0
+        mark.scatter_reverse(la.InsertMode.add)
+        return np.flatnonzero(mark.array[:imap.size_local] > 0.0).astype(np.int32)
+
+    def interface_index_sets(self, A: PETSc.Mat
+                             ) -> tuple[PETSc.IS, PETSc.IS, PETSc.NullSpace]:
+        """The structure with the soil's interface nodes, the rest of the soil, and its modes.
+
+        Rows of ``A`` (owned, sorted, whole nodes): the structure's displacement together with
+        the soil displacement at :meth:`interface_soil_nodes`, where the interface springs tie
+        the soil to the structure; the other soil displacement rows; and the six rigid-body
+        modes of those other soil nodes (near-nullspace of their block).
+        """
+        soil, structure = self.body("soil"), self.body("structure")
+        offs = self._block_offsets(A)
+        n_soil = soil.V.dofmap.index_map.size_local
+        at = np.zeros(n_soil, dtype=bool)
+        at[self.interface_soil_nodes()] = True
+        soil_rows = (offs[0] + 3 * np.arange(n_soil)[:, None] + np.arange(3)).reshape(-1, 3)
+        i_t = self.block_of(structure)
+        tied = np.concatenate([soil_rows[at].ravel(), np.arange(offs[i_t], offs[i_t + 1])])
+        x_rest = soil.V.tabulate_dof_coordinates()[:n_soil][~at]
+        return (self._rows_is(np.sort(tied)), self._rows_is(soil_rows[~at].ravel()),
+                self.rigid_body_modes(x_rest))
+
+    def _rows_is(self, rows: np.ndarray) -> PETSc.IS:
+        """Index set of whole-node displacement rows (block size 3)."""
+        is_ = PETSc.IS().createGeneral(rows.astype(PETSc.IntType), comm=self.comm)
+        is_.setBlockSize(3)
+        return is_
+
+    def rigid_body_modes(self, x: np.ndarray | None = None) -> PETSc.NullSpace:
+        """Six rigid-body modes as a PETSc near-nullspace (orthonormal).
+
+        Args:
+            x: coordinates ``(n, 3)`` of this rank's owned nodes of the block, in its row order;
+                ``None``: every body's owned displacement nodes (the displacement blocks).
+        """
+        if x is None:
+            x = np.concatenate([b.V.tabulate_dof_coordinates()[:b.V.dofmap.index_map.size_local]
+                                for b in self.bodies])
         nloc = x.shape[0]
         imap = common.IndexMap(self.comm, nloc)
         basis = [la.vector(imap, bs=3, dtype=PETSc.ScalarType) for _ in range(6)]

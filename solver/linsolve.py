@@ -1,8 +1,9 @@
 """Linear-solver option sets as data, and the KSP built from them.
 
-Two presets:
+Presets:
 
 * ``direct``: MUMPS LU (robust, for small and medium problems; the default).
+* ``direct_reuse``: GMRES on the current Jacobian preconditioned by a kept MUMPS LU.
 * ``fieldsplit_gamg``: FGMRES preconditioned by a block Gauss–Seidel (``multiplicative``
   field split) of the u–p system. The displacement block is solved by one GAMG V-cycle with the
   rigid-body near-nullspace; the pressure block of the preconditioning matrix carries the
@@ -14,6 +15,15 @@ Two presets:
   FGMRES iterations than GAMG on the verification cases (Terzaghi 16.6 vs 18.2, Mandel 18.3 vs
   17.2 per Newton step). For diffusion-dominated steps on large meshes override with
   ``fieldsplit_p_pc_type = "gamg"``.
+* ``fieldsplit_pier``: FGMRES preconditioned by a three-way block Gauss–Seidel for piles joined
+  to the soil by interface springs, in the order pressure, structure, soil: the pressure block
+  of the fixed-stress matrix by MUMPS LU (the fixed-stress split: pressure first; the order
+  mechanics first does not converge even with exact blocks), then the structure (piles and cap)
+  together with the soil displacement at the interface nodes by MUMPS LU (the stiff springs and
+  the 10^4 stiffness contrast stay inside one exact block), then the rest of the soil by one
+  GAMG V-cycle (rigid-body near-nullspace, Chebyshev/SOR smoothing: Chebyshev/Jacobi needs
+  3.5 times the iterations). Measured on the Pier 667 system in docs/benchmarks.md ("Iterative
+  solver for the interface system").
 
 Every problem has its own options prefix; after each solve the converged reason is checked and
 a negative reason raises :class:`ConvergenceError`.
@@ -41,7 +51,12 @@ class Preset:
     Attributes:
         name: preset name.
         options: PETSc options (without prefix).
-        fieldsplit: the preset needs the u/p index sets and the near-nullspace.
+        fieldsplit: the preset is a field split over the index sets named by ``splits``.
+        splits: the field-split blocks in order: ``"u"`` (every displacement), ``"p"``
+            (pressure), ``"structure"`` (the structure's displacement with the soil's at the
+            interface nodes), ``"soil"`` (the rest of the soil displacement). The options
+            prefix of a block is ``fieldsplit_<name>_``; the displacement block solved by AMG
+            (``"u"`` or ``"soil"``) carries its rigid-body modes as near-nullspace.
         fixed_stress: the preset needs the fixed-stress preconditioning matrix.
         reuse_factor_its: > 0: keep the factorisation across Newton iterations and steps as
             GMRES's preconditioner; refactor after a solve needing more iterations than this.
@@ -52,6 +67,7 @@ class Preset:
     name: str
     options: Mapping[str, Any]
     fieldsplit: bool = False
+    splits: tuple[str, ...] = ("u", "p")
     fixed_stress: bool = False
     reuse_factor_its: int = 0
     fallback: str | None = None
@@ -108,7 +124,35 @@ PRESETS: dict[str, Preset] = {
         fixed_stress=True,
         fallback="direct_reuse",
     ),
+    "fieldsplit_pier": Preset(
+        "fieldsplit_pier",
+        {
+            "ksp_type": "fgmres",
+            "ksp_rtol": 1e-8,
+            "ksp_atol": 1e-14,
+            "ksp_max_it": 150,
+            "ksp_gmres_restart": 150,
+            "pc_type": "fieldsplit",
+            "pc_fieldsplit_type": "multiplicative",
+            **{f"fieldsplit_{b}_{k}": v for b in ("p", "structure") for k, v in (
+                ("ksp_type", "preonly"), ("pc_type", "lu"),
+                ("pc_factor_mat_solver_type", "mumps"), ("mat_mumps_icntl_14", 80))},
+            "fieldsplit_soil_ksp_type": "preonly",
+            "fieldsplit_soil_pc_type": "gamg",
+            "fieldsplit_soil_pc_gamg_threshold": 0.02,
+            "fieldsplit_soil_mg_levels_ksp_type": "chebyshev",
+            "fieldsplit_soil_mg_levels_pc_type": "sor",
+            "fieldsplit_soil_mg_levels_ksp_max_it": 4,
+        },
+        fieldsplit=True,
+        splits=("p", "structure", "soil"),
+        fixed_stress=True,
+        fallback="direct_reuse",
+    ),
 }
+
+#: ``(name, index set, near-nullspace or None)`` of every block of a field split.
+Splits = list[tuple[str, PETSc.IS, PETSc.NullSpace | None]]
 
 
 def get_preset(name: str) -> Preset:
@@ -135,9 +179,7 @@ def create_ksp(
     prefix: str,
     preset: str,
     overrides: Mapping[str, Any] | None = None,
-    is_u: PETSc.IS | None = None,
-    is_p: PETSc.IS | None = None,
-    near_nullspace: PETSc.NullSpace | None = None,
+    splits: Splits | None = None,
 ) -> PETSc.KSP:
     """Create a KSP with operators ``A`` (and preconditioning matrix ``P``) from a preset.
 
@@ -148,9 +190,7 @@ def create_ksp(
         prefix: options prefix of this problem (e.g. ``"biot_"``).
         preset: preset name.
         overrides: extra options.
-        is_u: displacement index set (fieldsplit presets).
-        is_p: pressure index set (fieldsplit presets).
-        near_nullspace: rigid-body modes of the displacement block (fieldsplit presets).
+        splits: the blocks of a fieldsplit preset, in the preset's order (``Preset.splits``).
     """
     spec = get_preset(preset)
     opts = PETSc.Options()
@@ -160,13 +200,14 @@ def create_ksp(
     ksp.setOptionsPrefix(prefix)
     ksp.setOperators(A, P if P is not None else A)
     if spec.fieldsplit:
-        if is_u is None or is_p is None:
-            raise SolverInputError(f"preset {preset!r} needs the u and p index sets")
-        if near_nullspace is not None:
-            is_u.compose("nearnullspace", near_nullspace)
+        if splits is None or [s[0] for s in splits] != list(spec.splits):
+            raise SolverInputError(f"preset {preset!r} needs the index sets {spec.splits}")
+        for _, is_, nns in splits:
+            if nns is not None:
+                is_.compose("nearnullspace", nns)
         pc = ksp.getPC()
         pc.setType("fieldsplit")
-        pc.setFieldSplitIS(("u", is_u), ("p", is_p))
+        pc.setFieldSplitIS(*[(name, is_) for name, is_, _ in splits])
     ksp.setFromOptions()
     return ksp
 
@@ -196,17 +237,17 @@ class LinearSolver:
         A: the system matrix (its values change, the object stays).
         prefix: options prefix of the problem.
         preset: preset name; overrides: extra options of that preset.
-        fieldsplit_data: ``() -> (is_u, is_p, near_nullspace)`` for fieldsplit presets.
+        fieldsplit_data: ``(names) -> splits``: the index sets (and near-nullspaces) of the
+            blocks ``names`` of a fieldsplit preset (:data:`Splits`).
     """
 
     def __init__(self, comm: MPI.Comm, A: PETSc.Mat, prefix: str, preset: str,
                  overrides: Mapping[str, Any] | None,
-                 fieldsplit_data: Callable[[], tuple[PETSc.IS, PETSc.IS, PETSc.NullSpace]]
-                 ) -> None:
+                 fieldsplit_data: Callable[[tuple[str, ...]], Splits]) -> None:
         self.comm, self.prefix, self.A = comm, prefix, A
         self.P: PETSc.Mat | None = None
         self._fieldsplit_data = fieldsplit_data
-        self.refactorisations = 0  # LU factorisations (direct presets)
+        self.refactorisations = 0  # LU factorisations; preconditioner set-ups (field splits)
         self._new_matrix = True
         self.fallbacks: list[str] = []
         self.ksp: PETSc.KSP | None = None
@@ -220,12 +261,10 @@ class LinearSolver:
             for k in merged_options(self.preset, self._overrides):
                 db.delValue(f"{self.prefix}{k}")
             self.ksp.destroy()
-        is_u = is_p = nns = None
-        if spec.fieldsplit:
-            is_u, is_p, nns = self._fieldsplit_data()
+        splits = self._fieldsplit_data(spec.splits) if spec.fieldsplit else None
         self.preset, self._overrides, self.spec = preset, overrides, spec
         self.ksp = create_ksp(self.comm, self.A, self._preconditioning(), self.prefix, preset,
-                              overrides, is_u, is_p, nns)
+                              overrides, splits)
         self._reusing = False
         self._factor_undrained: bool | None = None  # constraints of the kept factorisation
 
@@ -284,8 +323,9 @@ class LinearSolver:
             self._set_reuse(False)  # stale factorisation: refactor and solve again
             self.ksp.solve(rhs, sol)
         its = check_reason(self.ksp, "Newton correction")
-        if not limit and self._new_matrix and self.spec.options.get("pc_type") == "lu":
-            self.refactorisations += 1  # preonly LU factors every new matrix once
+        if not limit and self._new_matrix and (self.spec.fieldsplit
+                                               or self.spec.options.get("pc_type") == "lu"):
+            self.refactorisations += 1  # LU (of the blocks) and AMG set up once per matrix
         self._new_matrix = False
         if limit:
             if not self._reusing:

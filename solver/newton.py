@@ -118,11 +118,23 @@ class NewtonSolver:
 
     def _line_search(self, rn: np.ndarray, gap: float, ref: np.ndarray, dU: float,
                      load_factor: float) -> tuple[np.ndarray, float]:
-        """Backtracking on the scaled residual (only acts when it grows); updates ``x``."""
+        """Backtracking on the scaled residual (only acts when it grows); updates ``x``.
+
+        A block counts with the excess of its residual over its convergence tolerance
+        (``rtol * ref + atol``): what lies below the tolerance does not decide the step.
+        Otherwise the round-off of an iterative linear solve in a block whose reference is
+        still zero (the pressure of the geostatic step, scaled by ``atol``) outweighs the
+        decrease of the others, and the search cuts every full step to its shortest.
+        """
         pb, nw, plate = self.problem, self.options, self.problem.plate
         scale = np.maximum(ref, nw.atol)
+        floor = nw.rtol * ref + nw.atol
         gscale = max(abs(plate.target(load_factor)), nw.atol) if plate is not None else 1.0
-        m0 = float(np.sum(rn / scale)) + abs(gap) / gscale
+
+        def merit(r: np.ndarray, g: float) -> float:
+            return float(np.sum(np.maximum(r - floor, 0.0) / scale)) + abs(g) / gscale
+
+        m0 = merit(rn, gap)
         x_old = pb.x.copy()
         U_old = plate.value - dU if plate is not None else 0.0
         alpha = 1.0
@@ -134,7 +146,7 @@ class NewtonSolver:
             pb.layout.x_to_fields(pb.x)
             try:
                 rn, gap = pb.residual_state(load_factor)
-                m1 = float(np.sum(rn / scale)) + abs(gap) / gscale
+                m1 = merit(rn, gap)
             except ConvergenceError:
                 if ls == nw.line_search:
                     raise

@@ -12,7 +12,8 @@ Stages (docs/model.md):
   displacements are reset to zero, keeping the stresses. The step has the size and drainage
   conditions of the first step that follows (:func:`first_dt`): in equilibrium no water flows,
   so the answer is that of an undrained check, and its Jacobian is the next step's (a reused
-  LU factorisation then serves both).
+  LU factorisation then serves both). A step that fails in the linear solver is solved again
+  with the preset's fallback, if it has one (as an instantaneous step).
 * ``load``: load factor ramped linearly to the stage's value; ``duration = 0`` is one
   instantaneous undrained step.
 * ``consolidation``: constant load to the stage end.
@@ -309,7 +310,11 @@ class _Run:
         """K0 stress, one equilibrium check step, displacements reset (see the module doc)."""
         problem, log = self.problem, self.state.log
         problem.set_initial_stress(problem.geostatic_stress())
-        info = problem.solve_step(first_dt(self.stages[i + 1:], self.ts), lam)
+        dt = first_dt(self.stages[i + 1:], self.ts)
+        info = problem.solve_step(dt, lam)
+        if not info.converged and problem.fall_back_linear_solver(info.message):
+            problem.rollback()
+            info = problem.solve_step(dt, lam)
         if not info.converged:
             raise SolverError(f"geostatic stage {st.name!r} did not converge: {info.message}")
         problem.commit()

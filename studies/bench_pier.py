@@ -30,9 +30,10 @@ COLUMNS = ("h_m", "symmetry", "status", "cells", "dofs", "preset", "newton", "kr
            "settlement_mm")
 
 
-def _command(scenario: str, h: float, symmetry: str, ranks: int, out: Path) -> list[str]:
-    sets = [] if symmetry == "auto" else [f"numerics.symmetry='{symmetry}'"]
-    return run_command(scenario, out, sets, ranks, mesh_size=h)
+def _command(scenario: str, h: float, symmetry: str, ranks: int, out: Path,
+             sets: Sequence[str] = ()) -> list[str]:
+    sym = [] if symmetry == "auto" else [f"numerics.symmetry='{symmetry}'"]
+    return run_command(scenario, out, [*sets, *sym], ranks, mesh_size=h)
 
 
 def _row(h: float, symmetry: str, out: Path, fin: Finished) -> dict[str, Any]:
@@ -55,28 +56,28 @@ def _row(h: float, symmetry: str, out: Path, fin: Finished) -> dict[str, Any]:
             "settlement_mm": round(1000.0 * sol["settlement_m"][-1]["settlement_m"], 4)}
 
 
-def _header(ranks: int) -> str:
-    """The date, the machine and the ranks (the line above the table)."""
+def _header(ranks: int, sets: Sequence[str] = ()) -> str:
+    """The date, the machine, the ranks and the overrides (the line above the table)."""
     return (f"{time.strftime('%Y-%m-%d')}, {platform.node()} ({platform.machine()}), "
-            f"{ranks} MPI ranks")
+            f"{ranks} MPI ranks" + "".join(f"; --set {kv}" for kv in sets))
 
 
 def bench_pier(scenario: str = "pier667", sizes: Sequence[float] = (1.0,),
                symmetries: Sequence[str] = ("auto",), ranks: int = 2,
-               out_dir: str | Path = "out/bench_pier", timeout: float | None = None
-               ) -> list[dict[str, Any]]:
+               out_dir: str | Path = "out/bench_pier", timeout: float | None = None,
+               sets: Sequence[str] = ()) -> list[dict[str, Any]]:
     """Run the job for every (size, symmetry); print and write the table; returns the rows.
 
     ``timeout``: seconds each run may take (``None``: no limit); a run killed at the timeout
-    is a row with its status.
+    is a row with its status. ``sets``: ``KEY=VALUE`` scenario overrides of every run.
     """
     out = Path(out_dir)
     rows = []
     for h in sizes:
         for sym in symmetries:
             case = out / f"h{h:g}_{sym}"
-            fin = run_isolated(_command(scenario, h, sym, ranks, case), timeout)
+            fin = run_isolated(_command(scenario, h, sym, ranks, case, sets), timeout)
             rows.append(_row(h, sym, case, fin))
             print(json.dumps(rows[-1]), flush=True)
-    write_table(out, "bench_pier", rows, COLUMNS, _header(ranks))
+    write_table(out, "bench_pier", rows, COLUMNS, _header(ranks, sets))
     return rows

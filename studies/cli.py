@@ -212,7 +212,7 @@ def _cmd_bench(args: argparse.Namespace) -> int:
         from pilegroup.studies.bench_pier import bench_pier
 
         rows = bench_pier(args.scenario, args.sizes or [1.0], args.symmetry, args.ranks or 2,
-                          args.out or "out/bench_pier", args.timeout)
+                          args.out or "out/bench_pier", args.timeout, args.set or ())
         return 0 if all(r["status"] == "complete" for r in rows) else 1
     if args.what == "stability":
         from pilegroup.studies.bench_stability import bench_stability
@@ -245,6 +245,9 @@ def _bench_arguments(p: argparse.ArgumentParser) -> None:
                    "(default: no limit for pier, 900 for stability)")
     p.add_argument("--cases", nargs="*", default=None, metavar="CASE",
                    help="stability: the cases to run (default: all)")
+    p.add_argument("--set", action="append", metavar="KEY=VALUE",
+                   help="pier: a scenario key for every run, e.g. "
+                   "numerics.solver.preset=fieldsplit_pier (repeatable)")
     p.set_defaults(func=_cmd_bench)
 
 

@@ -1,0 +1,123 @@
+"""The ``fieldsplit_pier`` preset on the small single-pile scenario: the direct answer, its
+interface index set is the interface's own nodes on any rank count, and a failure hands over to
+``direct_reuse``."""
+
+import dataclasses
+import logging
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from mpi4py import MPI
+
+from pilegroup.errors import ScenarioError
+from pilegroup.geometry.adapter import geometry_spec
+from pilegroup.geometry.convert import build_mesh
+from pilegroup.model import load_scenario
+from pilegroup.solver.probes import SettlementProbe
+from pilegroup.solver.stepping import run_stages
+from pilegroup.studies import pier
+
+
+def _run(sc, md, preset, options=None):
+    """Settlement (m), run log and problem of the scenario's stages with ``preset``."""
+    solver = dataclasses.replace(sc.numerics.solver, options=dict(options or {}))
+    sc = dataclasses.replace(sc, numerics=dataclasses.replace(sc.numerics, solver=solver))
+    pb = pier.build_problem(sc, md, preset)
+    probe = SettlementProbe(pb, pier.load_facets(sc, md))
+    log = run_stages(pb, pier.solver_stages(sc), pier.time_stepping(sc),
+                     geostatic_tol=pier.GEOSTATIC_TOL_M)
+    return probe(), log, pb
+
+
+@pytest.fixture
+def small(tmp_path, monkeypatch, small_pile):
+    monkeypatch.setenv("PILEGROUP_MESH_CACHE", str(tmp_path / "cache"))
+    sc = load_scenario(small_pile, {"numerics.solver.preset": "fieldsplit_pier"})
+    return sc, build_mesh(geometry_spec(sc), MPI.COMM_WORLD)
+
+
+def test_fieldsplit_pier_gives_the_direct_answer(small):
+    """Same settlement (1e-6) and Newton iterations as MUMPS LU: the Krylov solve is exact
+    enough for Newton; no hand-over to the fallback."""
+    sc, md = small
+    w_ref, log_ref, _ = _run(sc, md, "direct")
+    w, log, pb = _run(sc, md, "fieldsplit_pier")
+    assert pb.linear_solver.preset == "fieldsplit_pier" and not pb.linear_solver.fallbacks
+    assert w == pytest.approx(w_ref, rel=1e-6)
+    assert log.newton_total == log_ref.newton_total
+    assert sum(s.ksp_its for s in log.steps) <= 60 * log.newton_total
+
+
+def test_interface_index_set_is_the_interface_nodes(small):
+    """The soil nodes of the split (from the interface facet groups) are the nodes where the
+    interface integrates its nodal weights, on every rank count; the two displacement splits
+    partition the displacement rows."""
+    sc, md = small
+    pb = pier.build_problem(sc, md)
+    lay, comm = pb.layout, md.mesh.comm
+    imap = lay.body("soil").V.dofmap.index_map
+    mine = imap.local_to_global(lay.interface_soil_nodes())
+    weighted = np.flatnonzero(pb.interface.A[:imap.size_local] > 0.0).astype(np.int32)
+    theirs = imap.local_to_global(weighted)
+    mine, theirs = (np.sort(np.concatenate(comm.allgather(a))) for a in (mine, theirs))
+    assert mine.size > 0 and np.array_equal(mine, theirs)
+    is_u, _ = lay.index_sets(pb.A)
+    (_, is_t, nt), (_, is_s, ns) = lay.splits(pb.A, ("structure", "soil"))
+    assert nt is None and ns is not None
+    rows = np.sort(np.concatenate([is_t.getIndices(), is_s.getIndices()]))
+    assert np.array_equal(rows, is_u.getIndices())
+    n_struct = lay.body("structure").V.dofmap.index_map.size_global
+    assert is_t.getSize() == 3 * (n_struct + mine.size)
+
+
+def test_a_failing_solve_falls_back_to_direct_reuse(small, caplog):
+    """One FGMRES iteration cannot solve the step: one warning, then ``direct_reuse`` goes on
+    and the run ends with the direct answer."""
+    sc, md = small
+    w_ref, _, _ = _run(sc, md, "direct")
+    with caplog.at_level(logging.WARNING, logger="pilegroup.solver.linsolve"):
+        w, _, pb = _run(sc, md, "fieldsplit_pier", {"ksp_max_it": 1})
+    assert pb.linear_solver.preset == "direct_reuse"
+    assert len(pb.linear_solver.fallbacks) == 1
+    assert "'fieldsplit_pier' failed" in pb.linear_solver.fallbacks[0]
+    if MPI.COMM_WORLD.rank == 0:
+        assert len([r for r in caplog.records if r.levelno == logging.WARNING]) == 1
+    assert w == pytest.approx(w_ref, rel=1e-6)
+
+
+def test_tied_piles_reject_the_preset(small_pile):
+    with pytest.raises(ScenarioError, match="numerics.solver.preset.*interface.mode"):
+        load_scenario(small_pile, {"numerics.solver.preset": "fieldsplit_pier",
+                                   "interface.mode": "tied"})
+
+
+@pytest.mark.mpi
+def test_fieldsplit_pier_under_mpirun(rerun_under_mpirun):
+    """The tests above on 2 ranks (one subprocess, killed at the timeout)."""
+    rerun_under_mpirun(__file__, ranks=2, timeout=300)
+
+
+def _pytest_on_4_ranks(selection):
+    """The tests ``selection`` (``pytest -k``) under ``mpirun -n 4``, killed at the timeout."""
+    mpirun = Path(sys.executable).parent / "mpirun"
+    r = subprocess.run([str(mpirun), "-n", "4", sys.executable, "-m", "pytest", "-q", "-x",
+                        "-p", "no:cacheprovider", __file__, "-k", selection],
+                       capture_output=True, text=True, timeout=600)
+    assert r.returncode == 0, r.stdout[-3000:] + r.stderr[-3000:]
+
+
+@pytest.mark.mpi
+def test_index_sets_on_ranks_without_interface_facets_under_mpirun():
+    """On 4 ranks the small mesh leaves a rank without interface facets and without structure
+    cells: the index sets hold there too."""
+    _pytest_on_4_ranks("interface_index_set")
+
+
+@pytest.mark.slow
+@pytest.mark.mpi
+def test_answer_on_ranks_without_interface_facets_under_mpirun():
+    """The direct answer on 4 ranks (2 cores oversubscribed: about 100 s)."""
+    _pytest_on_4_ranks("direct_answer")
