@@ -205,8 +205,10 @@ class LinearSolver:
     """PETSc linear solver: a named preset merged with user ``options``.
 
     ``options`` are PETSc option names without the problem prefix. ``auto`` picks ``direct``
-    for small problems and ``direct_reuse`` for large ones (the presets measured to converge on
-    the pier system); a failing ``fieldsplit_gamg`` falls back to ``direct_reuse``.
+    for small problems, ``direct_reuse`` for larger ones and ``fieldsplit_pier`` for the largest
+    with piles joined by the interface (the presets measured to converge on the pier system;
+    ``studies.pier.auto_preset``); a failing ``fieldsplit_gamg`` or ``fieldsplit_pier`` falls
+    back to ``direct_reuse``.
     """
 
     preset: Literal["auto", "direct", "direct_reuse", "fieldsplit_gamg", "fieldsplit_pier"] = "auto"

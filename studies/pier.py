@@ -64,10 +64,26 @@ log = logging.getLogger(__name__)
 GEOSTATIC_TOL_M = 1e-4
 
 #: Below this many unknowns the ``auto`` preset uses one MUMPS factorisation per Newton matrix
-#: (``direct``); above, ``direct_reuse`` (one factorisation serves many solves). Both are
-#: measured to converge on the pier system; ``fieldsplit_gamg`` is not (docs/benchmarks.md), so
-#: ``auto`` never picks it.
-DIRECT_MAX_DOFS = 150_000
+#: (``direct``); above, ``direct_reuse`` (one factorisation serves many solves: the quarter
+#: pier at h = 1 m, 80,853 unknowns, needs 6 factorisations for its 29 Newton iterations). Both
+#: are measured to converge on the pier system; ``fieldsplit_gamg`` is not (docs/benchmarks.md),
+#: so ``auto`` never picks it.
+DIRECT_MAX_DOFS = 50_000
+#: Above this many unknowns, with the piles joined to the soil by the interface, ``auto`` uses
+#: the iterative ``fieldsplit_pier``: the LU of the whole system then needs most of a 24 GB
+#: machine (Pier 667, full model: 6.3 GB per rank at 274,180 unknowns, 15 GB at the first load
+#: step of h = 0.3 m), while the field split's LU blocks hold only the piles, the cap and their
+#: interface nodes; below it the kept factorisation is the faster (docs/benchmarks.md).
+ITERATIVE_MIN_DOFS = 350_000
+
+
+def auto_preset(dofs: int, interface_mode: str) -> str:
+    """The linear-solver preset ``auto`` stands for, by the unknowns and the pile coupling."""
+    if dofs <= DIRECT_MAX_DOFS:
+        return "direct"
+    if dofs > ITERATIVE_MIN_DOFS and interface_mode != "tied":
+        return "fieldsplit_pier"
+    return "direct_reuse"
 
 
 def soil_law(sc: Scenario, j: int) -> LinearElastic | MohrCoulomb | DruckerPrager:
@@ -105,8 +121,7 @@ def build_problem(sc: Scenario, md: MeshData, preset: str | None = None,
     disc = Discretisation(sc.numerics.element)
     p = preset or sc.numerics.solver.preset
     if p == "auto":
-        p = "direct" if estimate_dofs(md, sc.numerics.element) <= DIRECT_MAX_DOFS \
-            else "direct_reuse"
+        p = auto_preset(estimate_dofs(md, sc.numerics.element), sc.interface.mode)
     num = sc.numerics
     newton = NewtonOptions(rtol=num.newton_rtol, atol=num.newton_atol, max_it=num.time.max_newton)
     opts = SolverOptions(preset=p, overrides=dict(num.solver.options), newton=newton)
