@@ -205,10 +205,9 @@ class LinearSolver:
     """PETSc linear solver: a named preset merged with user ``options``.
 
     ``options`` are PETSc option names without the problem prefix. ``auto`` picks ``direct``
-    for small problems, ``direct_reuse`` for larger ones and ``fieldsplit_pier`` for the largest
-    with piles joined by the interface (the presets measured to converge on the pier system;
-    ``studies.pier.auto_preset``); a failing ``fieldsplit_gamg`` or ``fieldsplit_pier`` falls
-    back to ``direct_reuse``.
+    for small problems and ``direct_reuse`` for larger ones (the presets measured to converge on
+    the pier system at every size; ``studies.pier.auto_preset``); a failing ``fieldsplit_gamg``
+    or ``fieldsplit_pier`` falls back to ``direct_reuse``.
     """
 
     preset: Literal["auto", "direct", "direct_reuse", "fieldsplit_gamg", "fieldsplit_pier"] = "auto"

@@ -21,20 +21,18 @@ def test_newton_settings_reach_the_solver(tmp_path, monkeypatch, small_pile):
     assert (nw.rtol, nw.atol, nw.max_it) == (3e-7, 2e-10, 7)
 
 
-def test_auto_preset_by_size_and_coupling():
-    """``auto``: one LU per matrix when small, a kept LU when larger, the field split for the
-    largest systems with an interface (tied piles have no structure block to split off)."""
-    assert pier.auto_preset(pier.DIRECT_MAX_DOFS, "viscoplastic") == "direct"
-    assert pier.auto_preset(pier.DIRECT_MAX_DOFS + 1, "viscoplastic") == "direct_reuse"
-    assert pier.auto_preset(pier.ITERATIVE_MIN_DOFS, "elastic") == "direct_reuse"
-    assert pier.auto_preset(pier.ITERATIVE_MIN_DOFS + 1, "viscoplastic") == "fieldsplit_pier"
-    assert pier.auto_preset(pier.ITERATIVE_MIN_DOFS + 1, "tied") == "direct_reuse"
+
+def test_auto_preset_by_size():
+    """``auto``: one LU per matrix when small, a kept LU when larger, for any coupling."""
+    for mode in ("viscoplastic", "tied"):
+        assert pier.auto_preset(pier.DIRECT_MAX_DOFS, mode) == "direct"
+        assert pier.auto_preset(pier.DIRECT_MAX_DOFS + 1, mode) == "direct_reuse"
+        assert pier.auto_preset(10 ** 7, mode) == "direct_reuse"
 
 
 def test_auto_preset_reaches_the_solver(tmp_path, monkeypatch, small_pile):
     monkeypatch.setenv("PILEGROUP_MESH_CACHE", str(tmp_path / "cache"))
     monkeypatch.setattr(pier, "DIRECT_MAX_DOFS", 0)
-    monkeypatch.setattr(pier, "ITERATIVE_MIN_DOFS", 0)
     sc = load_scenario(small_pile, {"numerics.solver.preset": "auto"})
     pb = pier.build_problem(sc, build_mesh(geometry_spec(sc), MPI.COMM_WORLD))
-    assert pb.linear_solver.preset == "fieldsplit_pier"
+    assert pb.linear_solver.preset == "direct_reuse"
