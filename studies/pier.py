@@ -69,15 +69,16 @@ GEOSTATIC_TOL_M = 1e-4
 #: are measured to converge on the pier system; ``fieldsplit_gamg`` is not (docs/benchmarks.md),
 #: so ``auto`` never picks it.
 DIRECT_MAX_DOFS = 50_000
-def auto_preset(dofs: int, interface_mode: str) -> str:
-    """The linear-solver preset ``auto`` stands for, by the unknowns and the pile coupling.
+
+
+def auto_preset(dofs: int) -> str:
+    """The linear-solver preset ``auto`` stands for a system of ``dofs`` unknowns.
 
     ``fieldsplit_pier`` is not chosen: on the full Pier 667 model it converges at h = 1 m
-    (301,772 unknowns, 72-94 FGMRES iterations per solve) but its iterations grow past its limit
+    (301,772 unknowns, 69-94 FGMRES iterations per solve) but its iterations grow past its limit
     at h = 0.3 m (426,116 unknowns), where it hands over to ``direct_reuse``
-    (docs/benchmarks.md). ``interface_mode`` is for presets that need the interface.
+    (docs/benchmarks.md).
     """
-    del interface_mode  # every preset auto picks serves tied and interface models alike
     return "direct" if dofs <= DIRECT_MAX_DOFS else "direct_reuse"
 
 
@@ -116,7 +117,7 @@ def build_problem(sc: Scenario, md: MeshData, preset: str | None = None,
     disc = Discretisation(sc.numerics.element)
     p = preset or sc.numerics.solver.preset
     if p == "auto":
-        p = auto_preset(estimate_dofs(md, sc.numerics.element), sc.interface.mode)
+        p = auto_preset(estimate_dofs(md, sc.numerics.element))
     num = sc.numerics
     newton = NewtonOptions(rtol=num.newton_rtol, atol=num.newton_atol, max_it=num.time.max_newton)
     opts = SolverOptions(preset=p, overrides=dict(num.solver.options), newton=newton)

@@ -23,11 +23,10 @@ def test_newton_settings_reach_the_solver(tmp_path, monkeypatch, small_pile):
 
 
 def test_auto_preset_by_size():
-    """``auto``: one LU per matrix when small, a kept LU when larger, for any coupling."""
-    for mode in ("viscoplastic", "tied"):
-        assert pier.auto_preset(pier.DIRECT_MAX_DOFS, mode) == "direct"
-        assert pier.auto_preset(pier.DIRECT_MAX_DOFS + 1, mode) == "direct_reuse"
-        assert pier.auto_preset(10 ** 7, mode) == "direct_reuse"
+    """``auto``: one LU per matrix when small, a kept LU when larger."""
+    assert pier.auto_preset(pier.DIRECT_MAX_DOFS) == "direct"
+    assert pier.auto_preset(pier.DIRECT_MAX_DOFS + 1) == "direct_reuse"
+    assert pier.auto_preset(10 ** 7) == "direct_reuse"
 
 
 def test_auto_preset_reaches_the_solver(tmp_path, monkeypatch, small_pile):
