@@ -290,6 +290,7 @@ def run_summary(problem: BiotProblem, log: RunLog, extra: dict[str, Any] | None 
         "rejected_steps": log.rejected,
         "newton_iterations": log.newton_total,
         "ksp_iterations": sum(s.ksp_its for s in log.steps),
+        "ksp_iterations_max_per_solve": max((s.ksp_max for s in log.steps), default=0),
         "wall_s": comm.allreduce(log.wall_s, op=MPI.MAX),
         "timings_s": timings,
         "geostatic_max_u_m": log.geostatic_max_u,

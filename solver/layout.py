@@ -349,13 +349,14 @@ class BlockLayout:
                                        comm=self.comm)
         return self._rows_is(u_rows), is_p
 
-    def splits(self, A: PETSc.Mat, names: tuple[str, ...]
+    def splits(self, A: PETSc.Mat, names: tuple[str, ...], band_layers: int = 0
                ) -> list[tuple[str, PETSc.IS, PETSc.NullSpace | None]]:
         """Index sets of the field-split blocks ``names`` of ``A`` (``linsolve.Preset.splits``).
 
         ``"u"`` (every displacement, with the rigid-body modes), ``"p"`` (pressure),
-        ``"structure"`` and ``"soil"`` (:meth:`interface_index_sets`; the soil with its modes);
-        each as ``(name, index set, near-nullspace or None)`` (collective).
+        ``"structure"`` and ``"soil"`` (:meth:`interface_index_sets` with ``band_layers``; the
+        soil with its modes); each as ``(name, index set, near-nullspace or None)``
+        (collective).
         """
         known = ("u", "p", "structure", "soil")
         if any(n not in known for n in names):
@@ -365,7 +366,7 @@ class BlockLayout:
         if "u" in names:
             sets["u"] = (is_u, self.rigid_body_modes())
         if "structure" in names or "soil" in names:
-            is_t, is_s, nns = self.interface_index_sets(A)
+            is_t, is_s, nns = self.interface_index_sets(A, band_layers)
             sets["structure"], sets["soil"] = (is_t, None), (is_s, nns)
         return [(n, *sets[n]) for n in names]
 
@@ -393,23 +394,51 @@ class BlockLayout:
         mark.scatter_reverse(la.InsertMode.add)
         return np.flatnonzero(mark.array[:imap.size_local] > 0.0).astype(np.int32)
 
-    def interface_index_sets(self, A: PETSc.Mat
+    def soil_band(self, nodes: np.ndarray, layers: int) -> np.ndarray:
+        """Owned soil displacement nodes within ``layers`` cell layers of ``nodes``.
+
+        Starting from the owned soil nodes ``nodes`` (local numbering), every layer adds the
+        nodes of the soil cells that touch a node found so far; marks made on a rank's cells
+        are summed onto the nodes' owners and sent back to their ghosts before the next layer,
+        so the band is the same on any rank count (collective; sorted local numbers).
+        """
+        soil = self.body("soil")
+        imap = soil.V.dofmap.index_map
+        cells = soil.V.dofmap.list
+        mark = la.vector(imap, bs=1, dtype=np.float64)
+        mark.array[:] = 0.0
+        mark.array[nodes] = 1.0
+        mark.scatter_forward()
+        for _ in range(layers):
+            touched = cells[(mark.array[cells] > 0.0).any(axis=1)]
+            mark.array[imap.size_local:] = 0.0  # ghosts carry only this layer's new marks
+            mark.array[touched.ravel()] = 1.0
+            mark.scatter_reverse(la.InsertMode.add)
+            mark.scatter_forward()
+        return np.flatnonzero(mark.array[:imap.size_local] > 0.0).astype(np.int32)
+
+    def interface_index_sets(self, A: PETSc.Mat, band_layers: int = 0
                              ) -> tuple[PETSc.IS, PETSc.IS, PETSc.NullSpace]:
-        """The structure with the soil's interface nodes, the rest of the soil, and its modes.
+        """The structure with the soil around the interface, the soil, and the soil's modes.
 
         Rows of ``A`` (owned, sorted, whole nodes): the structure's displacement together with
         the soil displacement at :meth:`interface_soil_nodes`, where the interface springs tie
-        the soil to the structure; the other soil displacement rows; and the six rigid-body
-        modes of those other soil nodes (near-nullspace of their block).
+        the soil to the structure, and at the nodes within ``band_layers`` cell layers of them
+        (:meth:`soil_band`); the soil displacement rows other than the interface nodes (the
+        band belongs to both sets: the blocks overlap there); and the six rigid-body modes of
+        those soil nodes (near-nullspace of their block).
         """
         soil, structure = self.body("soil"), self.body("structure")
         offs = self._block_offsets(A)
         n_soil = soil.V.dofmap.index_map.size_local
         at = np.zeros(n_soil, dtype=bool)
-        at[self.interface_soil_nodes()] = True
+        iface = self.interface_soil_nodes()
+        at[iface] = True
+        band = np.zeros(n_soil, dtype=bool)
+        band[self.soil_band(iface, band_layers)] = True
         soil_rows = (offs[0] + 3 * np.arange(n_soil)[:, None] + np.arange(3)).reshape(-1, 3)
         i_t = self.block_of(structure)
-        tied = np.concatenate([soil_rows[at].ravel(), np.arange(offs[i_t], offs[i_t + 1])])
+        tied = np.concatenate([soil_rows[band].ravel(), np.arange(offs[i_t], offs[i_t + 1])])
         x_rest = soil.V.tabulate_dof_coordinates()[:n_soil][~at]
         return (self._rows_is(np.sort(tied)), self._rows_is(soil_rows[~at].ravel()),
                 self.rigid_body_modes(x_rest))

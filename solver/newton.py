@@ -43,6 +43,7 @@ class StepInfo:
     converged: bool
     newton_its: int = 0
     ksp_its: int = 0
+    ksp_max: int = 0  # Krylov iterations of the step's hardest Newton solve
     residuals: list[tuple[float, ...]] = field(default_factory=list)
     message: str = ""
     seconds: float = 0.0
@@ -75,7 +76,9 @@ class NewtonSolver:
                     info.message = f"no convergence in {nw.max_it} iterations; |r| = {rn}"
                     break
                 pb.assemble_jacobian()
-                info.ksp_its += pb.solve_linear(pb.b, pb.dx)
+                its = pb.solve_linear(pb.b, pb.dx)
+                info.ksp_its += its
+                info.ksp_max = max(info.ksp_max, its)
                 dU = pb.plate.border(pb, load_factor) if pb.plate is not None else 0.0
                 dxn = pb.layout.block_norms(pb.dx)
                 if not np.all(np.isfinite(dxn)):

@@ -155,7 +155,7 @@ class BiotProblem:
         opts = self.options
         self.linear_solver = LinearSolver(
             self.comm, self.A, opts.prefix, opts.preset, opts.overrides,
-            lambda names: self.layout.splits(self.A, names))
+            lambda spec: self.layout.splits(self.A, spec.splits, spec.band_layers))
         self._matrix_key: float | None = None  # dt of the assembled matrix (linear reuse)
         self._itf_is: list[PETSc.IS] | None = None  # index sets for the interface's matrix
 

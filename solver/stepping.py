@@ -51,6 +51,7 @@ class StepRecord:
     newton_its: int
     ksp_its: int
     seconds: float
+    ksp_max: int = 0  # Krylov iterations of the step's hardest Newton solve
 
 
 @dataclass
@@ -130,7 +131,8 @@ class AdaptiveStepper:
                     continue
                 problem.commit()
                 self.log.steps.append(StepRecord(stage, t_new, dt, load_factor(t_new),
-                                                 info.newton_its, info.ksp_its, info.seconds))
+                                                 info.newton_its, info.ksp_its, info.seconds,
+                                                 info.ksp_max))
                 t = t_new
                 if on_step is not None:
                     on_step(problem, t, stage)
@@ -326,7 +328,7 @@ class _Run:
                 "the initial stress is not in equilibrium with the buoyant weight")
         problem.reset_displacements()
         log.steps.append(StepRecord(st.name, t, 0.0, lam, info.newton_its, info.ksp_its,
-                                    info.seconds))
+                                    info.seconds, info.ksp_max))
         on_milestone(problem, t, st.name)
         self.at_boundary(t, lam, True, done=True)
 
@@ -344,7 +346,7 @@ class _Run:
                               t, lam, st.name)
         problem.commit()
         self.state.log.steps.append(StepRecord(st.name, t, 0.0, lam1, info.newton_its,
-                                               info.ksp_its, info.seconds))
+                                               info.ksp_its, info.seconds, info.ksp_max))
         on_milestone(problem, t, st.name)
         self.at_boundary(t, lam1, True, done=True)
 

@@ -2,10 +2,11 @@
 
 Each (size, symmetry) is one ``pilegroup run`` in its own process group (``mpirun -n RANKS``),
 so its peak memory is its own. The table: cells, unknowns, linear-solver preset, Newton and
-Krylov iterations, LU factorisations, wall time (s) of the whole run (meshing, solve, plots),
-peak resident memory of the largest rank and of all ranks (MB, ``getrusage``), and the
-settlement at the last output time. Results go to ``bench_pier.json`` and ``bench_pier.md`` in
-the output folder; failed runs are rows with their status and the last line of their error.
+Krylov iterations (in all, and of the hardest Newton solve), LU factorisations, wall time (s)
+of the whole run (meshing, solve, plots), peak resident memory of the largest rank and of all
+ranks (MB, ``getrusage``), and the settlement at the last output time. Results go to
+``bench_pier.json`` and ``bench_pier.md`` in the output folder; failed runs are rows with their
+status and the last line of their error.
 """
 
 from __future__ import annotations
@@ -26,7 +27,7 @@ from pilegroup.studies.benchrun import (
 )
 
 COLUMNS = ("h_m", "symmetry", "status", "cells", "dofs", "preset", "newton", "krylov",
-           "factorisations", "wall_s", "peak_rss_rank_mb", "peak_rss_total_mb",
+           "krylov_max", "factorisations", "wall_s", "peak_rss_rank_mb", "peak_rss_total_mb",
            "settlement_mm")
 
 
@@ -50,6 +51,7 @@ def _row(h: float, symmetry: str, out: Path, fin: Finished) -> dict[str, Any]:
             "cells": s["mesh"]["cells"],
             "dofs": sol["dofs"], "preset": sol["linear_solver"],
             "newton": sol["newton_iterations"], "krylov": sol["ksp_iterations"],
+            "krylov_max": sol.get("ksp_iterations_max_per_solve"),
             "factorisations": sol["lu_factorisations"],
             "peak_rss_rank_mb": round(max(rss), 0) if rss else None,
             "peak_rss_total_mb": round(sum(rss), 0) if rss else None,
