@@ -5,7 +5,13 @@ and loads; run :func:`run_stages` over a list of :class:`Stage` with :class:`Tim
 Units kN, m, day; tension positive; ``p`` = excess pore pressure (compression positive).
 """
 
-from pilegroup.errors import ConvergenceError, SolverError, SolverInputError, StepFailure
+from pilegroup.errors import (
+    ConvergenceError,
+    LinearSolveError,
+    SolverError,
+    SolverInputError,
+    StepFailure,
+)
 from pilegroup.solver.exports import (
     Export,
     SummaryWriter,
@@ -41,6 +47,7 @@ __all__ = [
     "AdaptiveStepper",
     "BiotProblem",
     "ConvergenceError",
+    "LinearSolveError",
     "Discretisation",
     "DisplacementBC",
     "ElasticSolid",

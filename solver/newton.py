@@ -29,7 +29,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from petsc4py import PETSc
 
-from pilegroup.errors import ConvergenceError
+from pilegroup.errors import ConvergenceError, LinearSolveError
 from pilegroup.solver.inputs import NewtonOptions
 
 if TYPE_CHECKING:
@@ -44,6 +44,7 @@ class StepInfo:
     newton_its: int = 0
     ksp_its: int = 0
     ksp_max: int = 0  # Krylov iterations of the step's hardest Newton solve
+    linear_failure: bool = False  # the step failed in a Krylov solve (not in Newton)
     residuals: list[tuple[float, ...]] = field(default_factory=list)
     message: str = ""
     seconds: float = 0.0
@@ -89,6 +90,7 @@ class NewtonSolver:
                 rn, gap = self._line_search(rn, gap, ref, dU, load_factor)
         except ConvergenceError as exc:
             info.converged = False
+            info.linear_failure = isinstance(exc, LinearSolveError)
             info.message = str(exc)
         except PETSc.Error as exc:  # pragma: no cover - PETSc failures are reported, not hidden
             info.converged = False

@@ -75,8 +75,9 @@ Callback = Callable[["BiotProblem", float, str], None]
 class AdaptiveStepper:
     """Adaptive stepper over a problem with ``solve_step/commit/rollback``.
 
-    Before giving up below ``dt_min`` it asks ``problem.fall_back_linear_solver(message)``
-    whether a fallback linear solver can retry the step. Its memory between steps is ``dt``
+    When a Krylov solve failed, or before giving up below ``dt_min``, it asks
+    ``problem.fall_back_linear_solver(message)`` whether a fallback linear solver can retry the
+    step at the same size. Its memory between steps is ``dt``
     (the next step size) and ``easy`` (easy steps in a row at that size); a resumed run sets
     both from its checkpoint.
 
@@ -150,13 +151,20 @@ class AdaptiveStepper:
 
     def _reject(self, problem: BiotProblem, info: StepInfo, t: float, dt: float,
                 load_factor: Callable[[float], float], stage: str) -> None:
-        """Roll a failed step back and cut ``dt`` (or hand over to a fallback linear solver)."""
+        """Roll a failed step back and cut ``dt``, or hand over to a fallback linear solver.
+
+        A failed Krylov solve hands over at once (a smaller step is no cure for a
+        preconditioner that does not converge, and an iterative preset failing near its
+        iteration limit would otherwise crawl on ever smaller steps); a Newton failure cuts
+        ``dt`` and hands over only below ``dt_min``. The step is then tried again unchanged.
+        """
         ts = self.ts
         problem.rollback()
         self.log.rejected += 1
         self.dt = dt * ts.cut
         self.easy = 0
-        if self.dt < ts.dt_min and problem.fall_back_linear_solver(info.message):
+        if (info.linear_failure or self.dt < ts.dt_min) \
+                and problem.fall_back_linear_solver(info.message):
             self.dt = dt  # the same step again with the fallback linear solver
             return
         if self.dt < ts.dt_min:

@@ -77,6 +77,10 @@ class ConvergenceError(SolverError):
     """Newton or the linear solver failed (diverged, NaN, iteration limit)."""
 
 
+class LinearSolveError(ConvergenceError):
+    """The Krylov solver of a Newton iteration diverged or reached its iteration limit."""
+
+
 class StepFailure(SolverError):
     """The adaptive stepper could not complete a step even at the minimum step size.
 
