@@ -77,9 +77,8 @@ class AdaptiveStepper:
 
     When a Krylov solve failed, or before giving up below ``dt_min``, it asks
     ``problem.fall_back_linear_solver(message)`` whether a fallback linear solver can retry the
-    step at the same size. Its memory between steps is ``dt``
-    (the next step size) and ``easy`` (easy steps in a row at that size); a resumed run sets
-    both from its checkpoint.
+    step at the same size. Its memory between steps is ``dt`` (the next step size) and ``easy``
+    (easy steps in a row at that size); a resumed run sets both from its checkpoint.
 
     Args:
         ts: step-size rules.

@@ -78,4 +78,4 @@ def test_a_preset_without_fallback_fails_the_step():
 
 @pytest.mark.mpi
 def test_linear_fallback_under_mpirun(rerun_under_mpirun):
-    rerun_under_mpirun(__file__)
+    rerun_under_mpirun(__file__, ranks=2, timeout=300)
