@@ -212,6 +212,9 @@ class SolverOptions:
             ``"fieldsplit_pier"`` (FGMRES + pressure / structure with the interface soil
             nodes / soil block Gauss–Seidel, for piles joined by the interface).
         overrides: extra PETSc options (without prefix), applied after the preset.
+        band_layers: cell layers of soil around the interface that join the structure's exact
+            block of a ``fieldsplit_pier`` split (``linsolve.Preset.band_layers``); ``None``:
+            the preset's own.
         prefix: PETSc options prefix of this problem.
         newton: Newton settings.
         jit_options: DOLFINx JIT options of the forms and expressions; the default compiles the
@@ -221,10 +224,17 @@ class SolverOptions:
 
     preset: str = "direct"
     overrides: Mapping[str, Any] = field(default_factory=dict)
+    band_layers: int | None = None
     prefix: str = "biot_"
     newton: NewtonOptions = field(default_factory=NewtonOptions)
     jit_options: Mapping[str, Any] | None = field(
         default_factory=lambda: {"cffi_extra_compile_args": ["-O3", "-march=native"]})
+
+    def __post_init__(self) -> None:
+        if self.band_layers is not None and not (
+                isinstance(self.band_layers, int) and self.band_layers >= 0):
+            raise SolverInputError(f"band_layers = {self.band_layers!r}; allowed: an integer "
+                                   ">= 0 or None (the preset's)")
 
 
 @dataclass(frozen=True)

@@ -20,15 +20,17 @@ Presets:
   to the soil by interface springs, in the order pressure, structure, soil: the pressure block
   of the fixed-stress matrix by MUMPS LU (the fixed-stress split: pressure first; the order
   mechanics first does not converge even with exact blocks), then the structure (piles and cap)
-  together with the soil displacement at the interface nodes and two cell layers of soil
+  together with the soil displacement at the interface nodes and a band of cell layers of soil
   around them by MUMPS LU (the stiff springs and the 10^4 stiffness contrast stay inside one
   exact block), then the soil other than the interface nodes by one GAMG V-cycle (rigid-body
-  near-nullspace, unsmoothed aggregation, Chebyshev/SOR smoothing: Chebyshev/Jacobi needs 3.5
-  times the iterations). The two displacement blocks overlap on the band of soil, which makes
-  the split a multiplicative Schwarz method there: on the full pier the band cuts the FGMRES
-  iterations by a quarter, and unsmoothed aggregation cuts the AMG set-up from 12.6 s to
-  0.7 s. Measured on the Pier 667 system in docs/benchmarks.md ("Iterative preconditioners on
-  the pier Jacobian").
+  near-nullspace, unsmoothed aggregation, four Chebyshev steps each of two SOR sweeps:
+  Chebyshev/Jacobi needs 3.5 times the iterations, one sweep per step 1.3 to 1.7 times). The
+  two displacement blocks overlap on the band of soil, which makes the split a multiplicative
+  Schwarz method there. The band's width in metres, not its layer count, sets the iterations,
+  so a problem built for a mesh size takes as many layers as cover about 2 m
+  (``SolverOptions.band_layers``; the preset's own two layers fit h = 1 m). Unsmoothed
+  aggregation cuts the AMG set-up from 12.6 s to 0.7 s. Measured on the Pier 667 system in
+  docs/benchmarks.md ("Iterative preconditioners on the pier Jacobian").
 
 Every problem has its own options prefix; after each solve the converged reason is checked and
 a negative reason raises :class:`LinearSolveError` (a :class:`ConvergenceError`).
@@ -64,7 +66,8 @@ class Preset:
             (``"u"`` or ``"soil"``) carries its rigid-body modes as near-nullspace.
         band_layers: the ``"structure"`` block also holds the soil nodes within this many cell
             layers of the interface nodes, which stay in the ``"soil"`` block too: the two
-            blocks overlap there (multiplicative Schwarz between them).
+            blocks overlap there (multiplicative Schwarz between them); a problem's
+            ``SolverOptions.band_layers`` replaces it.
         fixed_stress: the preset needs the fixed-stress preconditioning matrix.
         reuse_factor_its: > 0: keep the factorisation across Newton iterations and steps as
             GMRES's preconditioner; refactor after a solve needing more iterations than this.
@@ -161,6 +164,7 @@ PRESETS: dict[str, Preset] = {
             "fieldsplit_soil_mg_levels_ksp_type": "chebyshev",
             "fieldsplit_soil_mg_levels_pc_type": "sor",
             "fieldsplit_soil_mg_levels_ksp_max_it": 4,
+            "fieldsplit_soil_mg_levels_pc_sor_its": 2,  # two sweeps per smoothing step
         },
         fieldsplit=True,
         splits=("p", "structure", "soil"),

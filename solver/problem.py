@@ -155,7 +155,9 @@ class BiotProblem:
         opts = self.options
         self.linear_solver = LinearSolver(
             self.comm, self.A, opts.prefix, opts.preset, opts.overrides,
-            lambda spec: self.layout.splits(self.A, spec.splits, spec.band_layers))
+            lambda spec: self.layout.splits(
+                self.A, spec.splits,
+                spec.band_layers if opts.band_layers is None else opts.band_layers))
         self._matrix_key: float | None = None  # dt of the assembled matrix (linear reuse)
         self._itf_is: list[PETSc.IS] | None = None  # index sets for the interface's matrix
 

@@ -12,10 +12,11 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
-from pilegroup.errors import ScenarioError
+from pilegroup.errors import ScenarioError, SolverInputError
 from pilegroup.geometry.adapter import geometry_spec
 from pilegroup.geometry.convert import build_mesh
 from pilegroup.model import load_scenario
+from pilegroup.solver.inputs import SolverOptions
 from pilegroup.solver.probes import SettlementProbe
 from pilegroup.solver.stepping import run_stages
 from pilegroup.studies import pier
@@ -107,6 +108,17 @@ def test_interface_index_set_band_is_the_cell_layers_around_the_interface(small,
     assert is_s.getSize() == 3 * (imap.size_global - n_iface)
     both = comm.allreduce(np.intersect1d(is_t.getIndices(), is_s.getIndices()).size)
     assert both == 3 * (band.size - n_iface)
+
+
+def test_the_band_keeps_its_width_at_every_mesh_size(small):
+    """A problem built for a mesh size takes the band layers that cover about 2 m of soil (no
+    extra layer from round-off at h = 0.3 m); a negative count is refused."""
+    sc, md = small
+    assert [pier.band_layers(h) for h in (2.0, 1.0, 0.8, 0.6, 0.3, 0.1)] == [1, 2, 3, 4, 7, 20]
+    pb = pier.build_problem(sc, md)
+    assert pb.options.band_layers == pier.band_layers(sc.numerics.mesh.size_m)
+    with pytest.raises(SolverInputError, match="band_layers = -1"):
+        SolverOptions(band_layers=-1)
 
 
 def test_a_failing_solve_falls_back_to_direct_reuse(small, caplog):
