@@ -80,10 +80,10 @@ def auto_preset(dofs: int) -> str:
     """The linear-solver preset ``auto`` stands for a system of ``dofs`` unknowns.
 
     ``fieldsplit_pier`` is not chosen: it converges on the full Pier 667 model at h = 1 m and
-    0.3 m (at most 47 FGMRES iterations per solve at both) in about 60 % of the kept LU's
-    memory, but the sizes ``auto`` meets with the bundled scenario (the quarter model) run
-    faster on the kept LU; selecting it is the user's call for full models that the LU does not
-    fit (docs/benchmarks.md).
+    0.3 m (at most 47 FGMRES iterations per solve at both) in about two thirds of the kept
+    LU's memory (6.6 against 9.8 GB on the largest rank at 0.3 m), but the sizes ``auto``
+    meets with the bundled scenario (the quarter model) run faster on the kept LU; selecting
+    it is the user's call for full models that the LU does not fit (docs/benchmarks.md).
     """
     return "direct" if dofs <= DIRECT_MAX_DOFS else "direct_reuse"
 
@@ -137,11 +137,12 @@ def build_problem(sc: Scenario, md: MeshData, preset: str | None = None,
         p = auto_preset(estimate_dofs(md, sc.numerics.element))
     num = sc.numerics
     newton = NewtonOptions(rtol=num.newton_rtol, atol=num.newton_atol, max_it=num.time.max_newton)
+    h = mesh_size or num.mesh.size_m
     opts = SolverOptions(preset=p, overrides=dict(num.solver.options), newton=newton,
-                         band_layers=band_layers(mesh_size or num.mesh.size_m))
+                         band_layers=band_layers(h))
     return BiotProblem(md, materials, disc, displacement_bcs=dbcs,
                        pressure_bcs=[PressureBC(groups.GROUND)], loads=loads, options=opts,
-                       interface=interface_coupling(sc, mesh_size))
+                       interface=interface_coupling(sc, h))
 
 
 def full_load_area(sc: Scenario, md: MeshData, mesh_size: float | None = None) -> float:
