@@ -64,7 +64,7 @@ def _restore_python_signal_handlers() -> None:
 
     ``gmshInitialize``/``gmshFinalize`` set their own (or the default) actions; Python's
     record (``signal.getsignal``) is unchanged, so setting it again restores the handler a run
-    installed (e.g. a stop request: :mod:`pilegroup.studies.interrupt`).
+    installed (e.g. a stop request: :mod:`pilegroup.studies.run.interrupt`).
     """
     if threading.current_thread() is not threading.main_thread():
         return

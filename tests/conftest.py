@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest  # noqa: E402
 
 import pilegroup  # noqa: F401
-from pilegroup.studies.small_pile import small_pile_text
+from pilegroup.studies.bench.small_pile import small_pile_text
 
 BIN = Path(sys.executable).parent
 
@@ -51,7 +51,7 @@ def small_pile_run(request, tmp_path_factory):
     Output times 0, 0.5 and 2 days; read it, do not change it (copy it first).
     """
     from pilegroup.model import load_scenario
-    from pilegroup.studies.run import run_scenario
+    from pilegroup.studies.run.job import run_scenario
 
     mode = request.param
     base = tmp_path_factory.mktemp(f"small_pile_{mode}")

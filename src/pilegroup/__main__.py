@@ -2,6 +2,6 @@
 
 import sys
 
-from pilegroup.studies.cli import main
+from pilegroup.studies.cli.commands import main
 
 sys.exit(main())

@@ -10,7 +10,6 @@ the tolerance and the source of the reference. Modules:
 * ``consolidation``: ``terzaghi``, ``mandel`` (with their closed forms; the first-step check);
 * ``soil``: ``triaxial`` (and the strip-footing measurements);
 * ``interface``: ``shaft-capacity``, ``interface-patch``, ``tied-limit``;
-* ``bench``: error against wall time (``pilegroup bench verification``);
 * ``runner``: :func:`run_cases` and :func:`main`
   (``python -m pilegroup.studies.verification [CASE ...] [--size fast|bench] [--json]``,
   also under ``mpirun -n 2``; ``pilegroup verify``).
@@ -19,10 +18,9 @@ the tolerance and the source of the reference. Modules:
 # The case modules register their cases when imported: this order is the order in which
 # ``pilegroup verify`` runs and lists them.
 # isort: off
-from pilegroup.studies.verification import consolidation, soil, interface  # noqa: F401
+from pilegroup.studies.verification import consolidation, soil_cases, interface_cases  # noqa: F401
 # isort: on
 
-from pilegroup.studies.verification.bench import BENCH_LEVELS, bench_markdown, bench_verification
 from pilegroup.studies.verification.common import eval_points, shaft_profile_oscillation
 from pilegroup.studies.verification.consolidation import (
     first_step_oscillation,
@@ -33,18 +31,22 @@ from pilegroup.studies.verification.consolidation import (
     terzaghi_degree,
     terzaghi_series,
 )
-from pilegroup.studies.verification.interface import interface_patch, shaft_capacity, tied_limit
+from pilegroup.studies.verification.interface_cases import (
+    interface_patch,
+    shaft_capacity,
+    tied_limit,
+)
 from pilegroup.studies.verification.registry import CASES, CaseResult, register
 from pilegroup.studies.verification.runner import main, run_cases
-from pilegroup.studies.verification.soil import (
+from pilegroup.studies.verification.soil_cases import (
     footing_undrained_roughness,
     strip_footing,
     triaxial,
 )
 
-__all__ = ["BENCH_LEVELS", "CASES", "CaseResult", "bench_markdown", "bench_verification",
-           "eval_points", "first_step_oscillation", "footing_undrained_roughness",
-           "interface_patch", "main", "mandel", "mandel_centre_pressure",
+__all__ = ["CASES", "CaseResult", "eval_points", "first_step_oscillation",
+           "footing_undrained_roughness", "interface_patch", "main", "mandel",
+           "mandel_centre_pressure",
            "oscillation_measure", "register", "run_cases", "shaft_capacity",
            "shaft_profile_oscillation", "strip_footing", "terzaghi", "terzaghi_degree",
            "terzaghi_series", "tied_limit", "triaxial"]

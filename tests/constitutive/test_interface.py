@@ -16,7 +16,7 @@ import math
 import numpy as np
 import pytest
 
-from pilegroup.constitutive.interface import PileSoilInterface
+from pilegroup.constitutive.interface_law import PileSoilInterface
 from pilegroup.constitutive.paper import TABLE1, delta_eq17, dp_outer_cone, interface_kwargs
 from pilegroup.errors import ConstitutiveError
 

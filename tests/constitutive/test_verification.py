@@ -4,7 +4,7 @@ import math
 
 import pytest
 
-from pilegroup.constitutive.verification import (
+from pilegroup.constitutive.experiments import (
     explicit_stability_scan,
     insitu_sigma_h,
     seed_threshold_pressure,

@@ -27,7 +27,7 @@ from pilegroup.model import (
 )
 from pilegroup.model.bounds import BOUNDS
 from pilegroup.model.mesh_estimate import estimated_cells
-from pilegroup.studies.cli import EXIT_INPUT, main
+from pilegroup.studies.cli.commands import EXIT_INPUT, main
 
 DOCS = Path(__file__).resolve().parents[2] / "docs" / "model.md"
 #: Values that replace a leaf: non-finite numbers, their strings, wrong types.

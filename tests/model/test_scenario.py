@@ -12,7 +12,7 @@ from hypothesis import strategies as st
 
 from pilegroup.constitutive.paper import delta_eq17
 from pilegroup.model import Layer, ScenarioError, bundled_text, load_scenario, scenario_from_dict
-from pilegroup.studies.cli import EXIT_INPUT, main
+from pilegroup.studies.cli.commands import EXIT_INPUT, main
 
 PIER = bundled_text("pier667")
 
@@ -124,7 +124,7 @@ def test_interface_parameters_required_where_piles_cross_a_layer():
 
 
 def test_interface_quadrature_reaches_the_solver_coupling():
-    from pilegroup.studies.pier import interface_coupling
+    from pilegroup.studies.run.pipeline import interface_coupling
 
     d = _pier_dict()
     assert "quadrature" not in d["interface"]  # optional key: the bundled scenario omits it

@@ -11,7 +11,7 @@ from pilegroup.geometry.convert import build_mesh
 from pilegroup.model import load_scenario
 from pilegroup.solver.probes import SettlementProbe
 from pilegroup.solver.stepping import run_stages
-from pilegroup.studies import pier
+from pilegroup.studies.run import pipeline as pier
 
 
 @pytest.mark.parametrize("mode", ["tied", "viscoplastic"])

@@ -19,7 +19,7 @@ from pilegroup.model import load_scenario
 from pilegroup.solver.inputs import SolverOptions
 from pilegroup.solver.probes import SettlementProbe
 from pilegroup.solver.stepping import run_stages
-from pilegroup.studies import pier
+from pilegroup.studies.run import pipeline as pier
 
 
 def _run(sc, md, preset, options=None):

@@ -1,4 +1,4 @@
-"""Interface verification cases (studies/verification/interface.py): serial and mpirun -n 2.
+"""Interface verification cases (studies/verification/interface_cases.py): serial and mpirun -n 2.
 
 Every case runs with both interface quadratures (law at the nodes, or at facet Gauss points).
 """

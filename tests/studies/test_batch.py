@@ -14,7 +14,7 @@ from pathlib import Path
 
 import pytest
 
-from pilegroup.studies import cli
+from pilegroup.studies.cli import commands as cli
 
 BIN = Path(sys.executable).parent
 FAST = '{"outputs.xdmf" = false, "outputs.plots" = false}'
@@ -150,7 +150,8 @@ def test_bad_plan_exits_2_with_one_line_before_running(tmp_path, small_pile, cap
 SCRIPT = r"""
 import sys
 from mpi4py import MPI
-from pilegroup.studies import batch, cli
+from pilegroup.studies.batch import execute as batch
+from pilegroup.studies.cli import commands as cli
 
 def fail(sc, out, comm=None, **kwargs):
     if MPI.COMM_WORLD.rank == 1:

@@ -7,13 +7,13 @@ import pytest
 
 from pilegroup.errors import ScenarioError
 from pilegroup.model import load_scenario
-from pilegroup.studies.batch_plan import (
+from pilegroup.studies.batch.plan import (
     load_plan,
     queue_order,
     resolve_cases,
     scenario_digest,
 )
-from pilegroup.studies.batch_table import csv_text, is_complete
+from pilegroup.studies.batch.rows import csv_text, is_complete
 
 ROOT = Path(__file__).resolve().parents[2]
 

@@ -7,8 +7,8 @@ from pathlib import Path
 
 import pytest
 
-from pilegroup.studies.cli import build_parser, main
-from pilegroup.studies.pier import GEOSTATIC_TOL_M
+from pilegroup.studies.cli.commands import build_parser, main
+from pilegroup.studies.run.pipeline import GEOSTATIC_TOL_M
 
 BIN = Path(sys.executable).parent
 

@@ -1,11 +1,12 @@
-"""Two run folders compared against the reduced model's bounds (studies/compare_runs.py)."""
+"""Two run folders compared against the reduced model's bounds
+(studies/campaigns/compare_runs.py)."""
 
 import csv
 import shutil
 
 import pytest
 
-from pilegroup.studies import compare_runs
+from pilegroup.studies.campaigns import compare_runs
 
 
 def _scale(path, column, factor, row=None):

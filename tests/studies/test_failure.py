@@ -16,7 +16,8 @@ SCRIPT = r"""
 import sys
 import time
 from mpi4py import MPI
-from pilegroup.studies import cli, run
+from pilegroup.studies.cli import commands as cli
+from pilegroup.studies.run import job as run
 
 def solve_on_one_rank(*args, **kwargs):
     if MPI.COMM_WORLD.rank == 1:
@@ -45,7 +46,8 @@ def test_one_rank_failure_ends_every_rank(tmp_path, small_pile, monkeypatch):
 
 def test_collective_failure_writes_failed_summary(tmp_path, small_pile, monkeypatch):
     from pilegroup.errors import StepFailure
-    from pilegroup.studies import cli, run
+    from pilegroup.studies.cli import commands as cli
+    from pilegroup.studies.run import job as run
 
     def fail(*args, **kwargs):
         raise StepFailure("stage 'load': step at t = 0.5 day failed")
@@ -87,7 +89,7 @@ VERIFY_SCRIPT = r"""
 import sys
 import time
 from mpi4py import MPI
-from pilegroup.studies import cli
+from pilegroup.studies.cli import commands as cli
 from pilegroup.studies.verification import runner
 
 def case_failing_on_one_rank(name, size="fast", **overrides):

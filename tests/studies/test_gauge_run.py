@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pilegroup.studies.tables import COLUMNS, GAUGES_CSV, read_csv
+from pilegroup.studies.results.tables import COLUMNS, GAUGES_CSV, read_csv
 
 LOAD_KN = 500.0
 DEPTHS = [1.0, 4.0, 8.0, 11.5]
@@ -121,7 +121,7 @@ def test_every_pile_of_a_reduced_model_is_reported(small_pile_source, tmp_path):
     the mirror image of pile 2). Both piles get the same rows, and each top section carries
     half the load (2 % as in the single-pile test)."""
     from pilegroup.model import load_scenario
-    from pilegroup.studies.run import run_scenario
+    from pilegroup.studies.run.job import run_scenario
 
     text = small_pile_source.replace("grid = [1, 1]", "grid = [2, 1]\nspacing_m = [2.4, 2.4]")
     text = text.replace("cap_load_kN = 500.0", "cap_load_kN = 1000.0")

@@ -1,4 +1,4 @@
-"""The field method (Eqs. 1-3, studies/gauges.py) against values derived by hand.
+"""The field method (Eqs. 1-3, studies/results/gauges.py) against values derived by hand.
 
 A linear strain profile eps(z) = a + b z (compression positive, z depth) on a pile of modulus
 E, area A and circumference U gives, by hand:
@@ -14,7 +14,7 @@ E, area A and circumference U gives, by hand:
 import numpy as np
 import pytest
 
-from pilegroup.studies.gauges import field_reduction, interval_means, nearest_times
+from pilegroup.studies.results.gauges import field_reduction, interval_means, nearest_times
 
 E, A, U = 3.0e7, 0.5, 2.5  # kPa, m^2, m
 a, b = 4.0e-4, -5.0e-6  # strain at the top, per m of depth

@@ -4,7 +4,7 @@ import math
 
 import pytest
 
-from pilegroup.studies.gci import gci, observed_order
+from pilegroup.studies.campaigns.gci import gci, observed_order
 
 
 def _h(n):

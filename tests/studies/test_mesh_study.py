@@ -9,8 +9,8 @@ from pathlib import Path
 import pytest
 
 from pilegroup.model import load_scenario
-from pilegroup.studies.gci import gci
-from pilegroup.studies.mesh_study import (
+from pilegroup.studies.campaigns.gci import gci
+from pilegroup.studies.campaigns.mesh_study import (
     PENALTY_KEY,
     SizeCheck,
     check_size,
@@ -18,7 +18,7 @@ from pilegroup.studies.mesh_study import (
     study_cases,
     study_plan,
 )
-from pilegroup.studies.paper import PAPER_ELEMENTS, PAPER_HOURS, PAPER_SETTLEMENT_CM
+from pilegroup.studies.report.paper_values import PAPER_ELEMENTS, PAPER_HOURS, PAPER_SETTLEMENT_CM
 
 BIN = Path(sys.executable).parent
 

@@ -7,7 +7,7 @@ from mpi4py import MPI
 from pilegroup.geometry.adapter import geometry_spec
 from pilegroup.geometry.convert import build_mesh
 from pilegroup.model import load_scenario
-from pilegroup.studies import pier
+from pilegroup.studies.run import pipeline as pier
 
 
 def test_newton_settings_reach_the_solver(tmp_path, monkeypatch, small_pile):

@@ -5,8 +5,8 @@ import shutil
 import numpy as np
 import pytest
 
-from pilegroup.studies.readings import readings_table
-from pilegroup.studies.tables import read_csv
+from pilegroup.studies.campaigns.readings import readings_table
+from pilegroup.studies.results.tables import read_csv
 
 
 def test_one_row_per_complete_run_with_its_settlements(small_pile_run, tmp_path):

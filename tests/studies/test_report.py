@@ -7,10 +7,10 @@ from pathlib import Path
 import pytest
 
 from pilegroup.model import ScenarioError
-from pilegroup.studies.cli import build_parser, main
-from pilegroup.studies.plots import FIGURES
-from pilegroup.studies.report import results_markdown, write_report
-from pilegroup.studies.tables import COLUMNS
+from pilegroup.studies.cli.commands import build_parser, main
+from pilegroup.studies.report.plots import FIGURES
+from pilegroup.studies.report.run_report import results_markdown, write_report
+from pilegroup.studies.results.tables import COLUMNS
 
 #: Four layers: the soft layers 1-3 of Table 1 and one stiff layer (number, name, top, bottom).
 LAYERS = [(1, "clay", 0.0, 0.4), (2, "mud", 0.4, 19.7), (3, "mucky_clay", 19.7, 32.1),
@@ -190,7 +190,7 @@ def test_tied_run_and_interrupted_run(tmp_path):
 
 def test_missing_files_skip_figures(tmp_path, caplog):
     run = make_run(tmp_path / "run", files=("settlement.csv",))
-    with caplog.at_level("INFO", logger="pilegroup.studies.report"):
+    with caplog.at_level("INFO", logger="pilegroup.studies.report.run_report"):
         paths = write_report(run)
     assert [p.name for p in paths] == ["settlement_time.png"]
     assert "skipping friction_profiles.png" in caplog.text

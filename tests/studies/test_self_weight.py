@@ -5,7 +5,7 @@ import dataclasses
 import pytest
 
 from pilegroup.model import load_scenario
-from pilegroup.studies.self_weight import oedometric_modulus, self_weight_settlement
+from pilegroup.studies.campaigns.self_weight import oedometric_modulus, self_weight_settlement
 
 
 def test_oedometric_modulus_of_nu_zero_is_E_and_grows_with_nu():

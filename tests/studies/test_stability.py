@@ -18,9 +18,9 @@ import pytest
 
 from pilegroup.errors import ScenarioError
 from pilegroup.model.loader import parse_override
-from pilegroup.studies import bench_stability as bs
-from pilegroup.studies.benchrun import Finished, run_isolated
-from pilegroup.studies.small_pile import small_pile_scenario
+from pilegroup.studies.bench import stability as bs
+from pilegroup.studies.bench.benchrun import Finished, run_isolated
+from pilegroup.studies.bench.small_pile import small_pile_scenario
 
 #: The fast subset: a 1e-6 day step, the whole run in one step per stage, the lowest
 #: permeability the scenario accepts, a permeability it rejects, a load the stepper gives up on.

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 from matplotlib.image import imread
 
-from pilegroup.studies.report import results_markdown, write_report
-from pilegroup.studies.view3d import FILE, WINDOW, load_view_data, write_view3d
+from pilegroup.studies.report.run_report import results_markdown, write_report
+from pilegroup.studies.report.view3d import FILE, WINDOW, load_view_data, write_view3d
 
 PILE_LENGTH, PILE_RADIUS, SITE = 12.0, 0.4, (16.0, 16.0, 20.0)  # bundled single_pile, m
 
@@ -66,6 +66,6 @@ def test_report_redraws_the_view_and_skips_partial_output(small_pile_run, tmp_pa
             text = xdmf.read_text()
             xdmf.write_text(text[: len(text) // 2])
         caplog.clear()
-        with caplog.at_level("INFO", logger="pilegroup.studies.view3d"):
+        with caplog.at_level("INFO", logger="pilegroup.studies.report.view3d"):
             assert write_view3d(out) is None, damage
         assert f"skipping {FILE}: " in caplog.text, damage

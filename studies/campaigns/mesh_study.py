@@ -1,0 +1,183 @@
+"""``pilegroup study mesh``: a batch over the mesh size, with the penalty check, and its report.
+
+For each size ``h`` (``numerics.mesh.size_m``) the scenario is validated and its memory is
+estimated (:func:`estimated_memory_mb`); a size that is invalid or would not fit the machine's
+memory is not run and is reported with the reason. The sizes that can run are the cases
+``h<size>`` of a batch (:func:`pilegroup.studies.batch.execute.run_batch`: MPI groups, shared queue,
+resume). The interface's normal stiffness is ``normal_stiffness_factor * E / h``
+(:func:`pilegroup.studies.run.pipeline.interface_law`), so it grows as the mesh is refined; the
+coarsest and the finest sizes are also run with the factor times ``penalty_factor`` (cases
+``h<size>_penalty_x<factor>``) to show whether the answer depends on it. World rank 0 then
+writes the report (:mod:`pilegroup.studies.campaigns.mesh_report`).
+
+Memory estimate: the unknowns from the cell-count estimate of
+:func:`pilegroup.model.mesh_estimate.estimated_cells` (whole model, conservative; times the
+part a symmetry-reduced model keeps) and the unknowns per cell of the element pair; memory
+``ranks * BASE_MB + C * unknowns^ALPHA``, with ``C`` and ``ALPHA`` through the two pier runs of
+docs/benchmarks.md (:data:`MEMORY_POINTS`). Cases run side by side share the machine, so a case
+may use the machine's memory divided by the number of groups.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from mpi4py import MPI
+
+from pilegroup.errors import ScenarioError
+from pilegroup.geometry.adapter import geometry_spec
+from pilegroup.model import Scenario, load_scenario
+from pilegroup.model.mesh_estimate import estimated_cells
+from pilegroup.studies.batch.execute import run_batch
+from pilegroup.studies.batch.plan import Plan, PlanCase
+from pilegroup.studies.campaigns.mesh_report import write_mesh_report
+from pilegroup.studies.report.paper_values import PAPER_HOURS
+
+SIZE_KEY = "numerics.mesh.size_m"
+PENALTY_KEY = "interface.normal_stiffness_factor"
+#: The paper's five mesh sizes (m), the default of the study.
+PAPER_SIZES = tuple(sorted(PAPER_HOURS, reverse=True))
+
+#: Peak resident memory of one rank of a tiny run (Python, DOLFINx, PETSc loaded), MB: 602 MB
+#: measured for the 198-cell single pile of the test suite.
+BASE_MB = 600.0
+#: (unknowns, MB over both ranks above the base) of two runs on 2 ranks, docs/benchmarks.md
+#: "make run with the quarter model": quarter pier 80,853 unknowns at 1.5 GB per rank, full
+#: pier 274,180 unknowns at 7.0 GB per rank (the larger of the two measurements).
+MEMORY_POINTS = ((80_853, 2 * 1500.0 - 2 * BASE_MB), (274_180, 2 * 7000.0 - 2 * BASE_MB))
+ALPHA = math.log(MEMORY_POINTS[1][1] / MEMORY_POINTS[0][1]) / math.log(
+    MEMORY_POINTS[1][0] / MEMORY_POINTS[0][0])
+C_MB = MEMORY_POINTS[1][1] / MEMORY_POINTS[1][0] ** ALPHA
+#: Vertices per hexahedron of the graded meshes (1.11 for the pier, more for tiny meshes).
+VERTICES_PER_CELL = 1.15
+#: Unknowns per vertex: 3 displacements (Q2: ~8 nodes per vertex) + 1 pressure.
+UNKNOWNS_PER_VERTEX = {"Q1Q1": 4, "Q2Q1": 25}
+
+
+@dataclass(frozen=True)
+class SizeCheck:
+    """One mesh size: whether it can run here, why not, and the estimates behind it."""
+
+    h: float
+    runnable: bool
+    reason: str = ""
+    estimated_cells: float = math.nan
+    estimated_unknowns: float = math.nan
+    estimated_memory_mb: float = math.nan
+
+
+@dataclass(frozen=True)
+class StudyCase:
+    """A case of the study: its name, mesh size and penalty multiplier (1 = as given)."""
+
+    name: str
+    h: float
+    penalty: float = 1.0
+
+
+@dataclass(frozen=True)
+class StudyInfo:
+    """What the report states besides the rows: scenario, sizes, cases, ranks, memory."""
+
+    scenario: Scenario
+    checks: tuple[SizeCheck, ...]
+    cases: tuple[StudyCase, ...]
+    ranks: int
+    ranks_per_case: int
+    memory_mb: float
+    penalty_factor: float
+
+
+def machine_memory_mb() -> float:
+    """Physical memory of this machine, MB."""
+    return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES") / 2 ** 20
+
+
+def estimated_unknowns(sc: Scenario) -> float:
+    """Unknowns of ``sc``'s model from the (conservative) cell-count estimate."""
+    kept = 0.5 ** len(geometry_spec(sc).cut_planes())
+    per_vertex = UNKNOWNS_PER_VERTEX.get(sc.numerics.element, 25)
+    return estimated_cells(sc) * kept * VERTICES_PER_CELL * per_vertex
+
+
+def estimated_memory_mb(unknowns: float, ranks: int) -> float:
+    """Peak memory of a run over all its ranks, MB (fit of :data:`MEMORY_POINTS`)."""
+    return ranks * BASE_MB + C_MB * unknowns ** ALPHA
+
+
+def check_size(source: str, sets: Mapping[str, Any], h: float, ranks: int, groups: int,
+               memory_mb: float) -> SizeCheck:
+    """Whether size ``h`` validates and fits ``memory_mb / groups`` on ``ranks`` ranks."""
+    try:
+        sc = load_scenario(source, {**sets, SIZE_KEY: h})
+    except ScenarioError as exc:
+        return SizeCheck(h, False, f"invalid: {exc}")
+    n = estimated_unknowns(sc)
+    mem = estimated_memory_mb(n, ranks)
+    budget = memory_mb / groups
+    ok = mem <= budget
+    reason = "" if ok else (
+        f"needs about {mem / 1024:.1f} GB ({n:,.0f} unknowns estimated) > {budget / 1024:.1f} "
+        f"GB per case ({memory_mb / 1024:.1f} GB of memory / {groups} cases at once)")
+    return SizeCheck(h, ok, reason, estimated_cells(sc), n, mem)
+
+
+def study_cases(sc: Scenario, checks: Sequence[SizeCheck], penalty_factor: float
+                ) -> list[StudyCase]:
+    """The size cases (coarse to fine) and the penalty cases of the coarsest and finest."""
+    sizes = sorted((c.h for c in checks if c.runnable), reverse=True)
+    cases = [StudyCase(f"h{h:g}", h) for h in sizes]
+    if sizes and sc.interface.mode != "tied" and penalty_factor != 1.0:
+        for h in dict.fromkeys((sizes[0], sizes[-1])):
+            cases.append(StudyCase(f"h{h:g}_penalty_x{penalty_factor:g}", h, penalty_factor))
+    return cases
+
+
+def study_plan(source: str, sets: Mapping[str, Any], sc: Scenario,
+               cases: Sequence[StudyCase]) -> Plan:
+    """The batch plan of ``cases`` (``sets`` first, then the size and the penalty)."""
+    factor = sc.interface.normal_stiffness_factor
+    out = []
+    for c in cases:
+        over = [*sets.items(), (SIZE_KEY, c.h)]
+        if c.penalty != 1.0:
+            over.append((PENALTY_KEY, factor * c.penalty))
+        out.append(PlanCase(c.name, tuple(over)))
+    return Plan(source, tuple(out), f"mesh_study_{sc.name}")
+
+
+def run_mesh_study(source: str, sets: Mapping[str, Any], sizes: Sequence[float], out: Path,
+                   ranks_per_case: int = 1, penalty_factor: float = 10.0,
+                   memory_mb: float | None = None, comm: MPI.Comm = MPI.COMM_WORLD,
+                   progress: bool = True) -> int:
+    """Run the study and write its report to ``out``; the number of failed cases.
+
+    Collective over ``comm``. Raises :class:`ScenarioError` if the base scenario is invalid.
+    """
+    sc = load_scenario(source, sets)
+    groups = comm.size // max(ranks_per_case, 1)
+    memory = memory_mb or machine_memory_mb()
+    checks = [check_size(source, sets, h, ranks_per_case, max(groups, 1), memory)
+              for h in dict.fromkeys(sizes)]
+    cases = study_cases(sc, checks, penalty_factor)
+    failed = 0
+    rows: list[dict[str, Any]] = []
+    if cases:
+        result = run_batch(study_plan(source, sets, sc, cases), out, ranks_per_case, comm,
+                           progress)
+        rows, failed = result.rows, result.failed
+    if comm.rank == 0:
+        info = StudyInfo(sc, tuple(checks), tuple(cases), comm.size, ranks_per_case, memory,
+                         penalty_factor)
+        write_mesh_report(out, info, rows)
+    return failed
+
+
+__all__ = ["PAPER_SIZES", "SizeCheck", "StudyCase", "StudyInfo", "check_size",
+           "estimated_memory_mb", "estimated_unknowns", "machine_memory_mb", "run_mesh_study",
+           "study_cases", "study_plan"]

@@ -1,0 +1,1 @@
+"""The ``pilegroup`` command line: argument parsing, exit codes, one-line errors."""

@@ -1,0 +1,132 @@
+"""The ``pilegroup batch`` and ``pilegroup study`` commands (registered by the CLI).
+
+Both run under MPI as they are (``mpirun -n N pilegroup batch PLAN --ranks-per-case k``, or
+``srun``). Exit codes as the rest of the CLI: 0 every case complete, 1 a case failed, 2 invalid
+input; the one-line message of an invalid input is printed by world rank 0 only.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+from typing import Any
+
+from pilegroup.errors import ScenarioError
+from pilegroup.model.loader import parse_override
+from pilegroup.studies.report.paper_values import PAPER_HOURS
+
+EXIT_INPUT = 2
+
+BATCH_DESCRIPTION = (
+    "Run the cases of a plan (TOML: a base scenario and [[case]] entries and/or a [sweep] of "
+    "scenario keys; see README.md) on groups of --ranks-per-case MPI ranks, each group taking "
+    "the next case from a shared queue (largest estimated mesh first). Every case is validated "
+    "before anything runs (exit 2 naming the case and key). Each case writes its run folder "
+    "OUT/<case>; a failed case is recorded and the others go on (exit 1 at the end). Running "
+    "the plan again skips the cases already complete for the same scenario. Rank 0 shows the "
+    "progress and keeps OUT/batch.csv and OUT/batch.json current.")
+STUDY_DESCRIPTION = (
+    "Mesh-sensitivity study: a batch over numerics.mesh.size_m (--sizes), the coarsest and "
+    "finest sizes again with the interface normal penalty x --penalty-factor, and a report "
+    "(mesh_study.md, PNG figures, mesh_study.csv, gci.csv): the paper's Table 2 beside ours, "
+    "Richardson extrapolation, observed order and GCI (Celik et al. 2008), error against time, "
+    "centre-pile profiles for every size, the penalty check; sizes that are invalid or would not "
+    "fit the machine's memory are reported, not run.")
+
+
+def _world_rank() -> int:
+    from mpi4py import MPI
+
+    return MPI.COMM_WORLD.rank
+
+
+def _input_error_once(exc: ScenarioError) -> int:
+    """Invalid input under MPI: world rank 0 reports it (through the CLI), the others exit."""
+    if _world_rank() == 0:
+        raise exc
+    return EXIT_INPUT
+
+
+def _print_rows(rows: list[dict[str, Any]]) -> None:
+    for r in rows:
+        wall = "" if r.get("wall_s") is None else f" {r['wall_s']:.1f} s"
+        why = f": {r['message']}" if r["status"] == "failed" else ""
+        skip = " (complete before, skipped)" if r.get("skipped") else ""
+        print(f"{r['name']}: {r['status']}{skip}{wall}{why}")
+
+
+def _cmd_batch(args: argparse.Namespace) -> int:
+    from pilegroup.studies.batch.execute import run_batch
+    from pilegroup.studies.batch.plan import load_plan
+
+    try:
+        plan = load_plan(args.plan)
+        out = Path(args.out) if args.out else Path("out") / Path(args.plan).stem
+        result = run_batch(plan, out, args.ranks_per_case, progress=not args.no_progress)
+    except ScenarioError as exc:
+        return _input_error_once(exc)
+    if _world_rank() == 0:
+        _print_rows(result.rows)
+        print(f"batch: {out / 'batch.csv'}, {out / 'batch.json'}")
+    return 1 if result.failed else 0
+
+
+def batch_arguments(p: argparse.ArgumentParser) -> None:
+    """Arguments of ``pilegroup batch``."""
+    p.add_argument("plan", metavar="PLAN.toml", help="the plan file")
+    p.add_argument("--out", help="batch folder (default: out/<plan file stem>)")
+    p.add_argument("--ranks-per-case", type=int, default=1, metavar="K",
+                   help="MPI ranks of each case (must divide the number of ranks; default 1)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.set_defaults(func=_cmd_batch)
+
+
+def _cmd_study_mesh(args: argparse.Namespace) -> int:
+    from pilegroup.studies.campaigns.mesh_study import run_mesh_study
+
+    try:
+        sets = dict(parse_override(t) for t in (args.set or []))
+        out = Path(args.out) if args.out else Path("out") / (
+            "mesh_study_" + Path(args.scenario).stem)
+        memory = None if args.memory_gb is None else args.memory_gb * 1024.0
+        failed = run_mesh_study(args.scenario, sets, args.sizes, out, args.ranks_per_case,
+                                args.penalty_factor, memory, progress=not args.no_progress)
+    except ScenarioError as exc:
+        return _input_error_once(exc)
+    if _world_rank() == 0:
+        print(f"mesh study: {out / 'mesh_study.md'}")
+    return 1 if failed else 0
+
+
+def study_arguments(p: argparse.ArgumentParser) -> None:
+    """Arguments of ``pilegroup study``."""
+    sub = p.add_subparsers(dest="study", required=True, metavar="STUDY")
+    m = sub.add_parser("mesh", help="mesh-sensitivity study with GCI and the paper's Table 2",
+                       description=STUDY_DESCRIPTION)
+    m.add_argument("scenario", help="scenario TOML file or bundled name, e.g. pier667")
+    m.add_argument("--sizes", type=float, nargs="+", metavar="H",
+                   default=sorted(PAPER_HOURS, reverse=True),
+                   help="element sizes at the pile surfaces in m (default: the paper's "
+                   "1.0 0.8 0.6 0.3 0.1)")
+    m.add_argument("--out", help="study folder (default: out/mesh_study_<scenario>)")
+    m.add_argument("--set", action="append", metavar="KEY=VALUE",
+                   help="set a scenario key in every case (as pilegroup run --set); repeatable")
+    m.add_argument("--ranks-per-case", type=int, default=1, metavar="K",
+                   help="MPI ranks of each case (default 1)")
+    m.add_argument("--penalty-factor", type=float, default=10.0, metavar="F",
+                   help="multiplier of interface.normal_stiffness_factor for the penalty check "
+                   "(default 10; 1 skips it)")
+    m.add_argument("--memory-gb", type=float, default=None, metavar="GB",
+                   help="memory the cases may use together (default: the machine's memory)")
+    m.add_argument("--no-progress", action="store_true", help="no progress bar")
+    m.set_defaults(func=_cmd_study_mesh)
+
+
+#: (name, help, description, add_arguments) of the commands of this module.
+COMMANDS = (
+    ("batch", "run the cases of a plan file on groups of MPI ranks", BATCH_DESCRIPTION,
+     batch_arguments),
+    ("study", "studies made of batches (mesh sensitivity)", "Studies made of batches of runs.",
+     study_arguments),
+)
+

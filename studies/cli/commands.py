@@ -1,0 +1,356 @@
+"""The ``pilegroup`` command line.
+
+Exit codes: 0 success, 1 a run failed (e.g. no convergence), 2 invalid input (a clear one-line
+message naming the key, the value and what is allowed; no traceback), 130/143 a run stopped by
+SIGINT/SIGTERM after saving a checkpoint (128 + the signal number).
+
+Under MPI a :class:`~pilegroup.errors.PilegroupError` is raised on every rank alike (the
+scenario, the stepper's decisions and the Newton checks are collective), so rank 0 prints its
+one line; any other exception may be one rank's alone and ends every rank (:func:`_abort`).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import logging
+import os
+import shlex
+import sys
+import traceback
+from collections.abc import Sequence
+from pathlib import Path
+
+from pilegroup.errors import RunInterrupted
+from pilegroup.fileio import write_text_atomic
+from pilegroup.model import BUNDLED, PilegroupError, ScenarioError, bundled_text, load_scenario
+from pilegroup.model.loader import parse_override
+from pilegroup.studies.cli.batch_commands import COMMANDS as BATCH_COMMANDS
+from pilegroup.studies.run.interrupt import abort_job
+
+log = logging.getLogger("pilegroup")
+
+EXIT_INPUT = 2
+EXIT_FAILED = 1
+SCENARIO_HELP = "scenario TOML file or bundled name, e.g. pier667"
+SET_HELP = ("set a scenario key before validation (dotted path, TOML value), e.g. "
+            "--set numerics.mesh.size_m=0.6 --set layers[0].E_MPa=3; repeatable")
+
+
+def _overrides(args: argparse.Namespace) -> dict[str, object]:
+    """The ``--set`` overrides of a command (later ones win)."""
+    return dict(parse_override(t) for t in (getattr(args, "set", None) or []))
+
+#: Descriptions of the sub-commands (``pilegroup COMMAND --help``).
+DESCRIPTIONS = {
+    "scenario": "Show a bundled scenario or validate a scenario file.",
+    "run": ("Validate the scenario, build its mesh and run every stage that is implemented; write "
+            "outputs and summary.json to --out."),
+    "mesh": ("Mesh the scenario with gmsh (cap, piles, layered soil; plan quads extruded through "
+             "the layers), write mesh.xdmf with cell and facet tags (ParaView), "
+             "mesh_summary.json, plan.png and cutaway.png, and print counts and quality. Meshes "
+             "are cached by their parameters ($PILEGROUP_MESH_CACHE or "
+             "~/.cache/pilegroup/meshes)."),
+    "verify": ("Run verification cases through the real pipeline and print error, tolerance and "
+               "pass/fail per case (exit 1 if any fails). Cases: terzaghi (1D consolidation), "
+               "mandel (Mandel-Cryer effect), triaxial (Mohr-Coulomb failure load), "
+               "shaft-capacity (pile pushed to shaft failure), interface-patch (solver interface "
+               "vs pointwise law), tied-limit (stiff interface vs tied pile). Works under "
+               "mpirun -n 2."),
+    "bench": ("constitutive: law updates per second; meshing: cells, quality and time for the "
+              "paper's five mesh sizes; verification: run time against error for Terzaghi and "
+              "Mandel (table, JSON and PNG); pier: the whole job per mesh size and symmetry "
+              "(unknowns, Newton and Krylov counts, factorisations, wall, peak memory); "
+              "stability: the small scenario under extreme time steps, permeability, "
+              "stiffness, loads, interface options and element pairs, each run in its own "
+              "process under a timeout (status, counts, settlement, max |p|, NaN check)."),
+    "report": ("Read the CSV and JSON files of a finished or interrupted run (settlement.csv, "
+               "pile_profiles.csv, layer_history.csv, pile_loads.csv, load_settlement.csv, "
+               "gauges.csv, summary.json), write PNG "
+               "figures to OUT_DIR/plots (figures whose file is missing are skipped) and, with "
+               "--markdown, a results section. A CSV with a wrong header is invalid input "
+               "(exit 2)."),
+}
+
+
+def _world_rank() -> int:
+    try:
+        from mpi4py import MPI
+    except ImportError:  # pragma: no cover - mpi4py always ships with dolfinx
+        return 0
+    return MPI.COMM_WORLD.rank
+
+
+def setup_logging(verbose: int) -> None:
+    """Log to stderr on rank 0 only (other ranks log warnings and errors)."""
+    level = logging.DEBUG if verbose > 1 else logging.INFO
+    if _world_rank() != 0:
+        level = logging.WARNING
+    logging.basicConfig(level=level, format="%(levelname)s %(name)s: %(message)s")
+
+
+def _cmd_scenario_show(args: argparse.Namespace) -> int:
+    if _world_rank() == 0:
+        sys.stdout.write(bundled_text(args.name))
+    return 0
+
+
+def _cmd_scenario_validate(args: argparse.Namespace) -> int:
+    sc = load_scenario(args.file)
+    if _world_rank() == 0:
+        print(f"{args.file}: valid scenario {sc.name!r}: {len(sc.layers)} layers, "
+              f"{sc.piles.count} piles, {len(sc.stages)} stages, end {sc.time.end_day:g} day")
+    return 0
+
+
+def _scenario_arguments(p: argparse.ArgumentParser) -> None:
+    ssub = p.add_subparsers(dest="action", required=True, metavar="ACTION")
+    show = ssub.add_parser("show", help="print a bundled scenario (TOML, with its comments)",
+                           description="Print a bundled scenario; copy it to start your own.")
+    show.add_argument("name", nargs="?", default="pier667", choices=BUNDLED,
+                      help="bundled scenario name (default: pier667)")
+    show.set_defaults(func=_cmd_scenario_show)
+    val = ssub.add_parser("validate", help="check a scenario file and report the first problem",
+                          description="Check a scenario TOML file: unknown, missing or mistyped "
+                          "keys and out-of-range values are reported with the key, the value, "
+                          "its unit and what is allowed (exit code 2).")
+    val.add_argument("file", help="scenario TOML file (or a bundled name)")
+    val.set_defaults(func=_cmd_scenario_validate)
+
+
+def _cmd_run(args: argparse.Namespace) -> int:
+    from pilegroup.studies.run.interrupt import stop_on_signals
+    from pilegroup.studies.run.job import run_scenario
+
+    sc = load_scenario(args.scenario, _overrides(args))
+    out = Path(args.out) if args.out else Path("out") / sc.name
+    with stop_on_signals():  # SIGTERM/SIGINT: checkpoint at the next step boundary, then stop
+        summary = run_scenario(sc, out, mesh_size=args.mesh_size, stop_after=args.stop_after,
+                               resume=args.resume)
+    if _world_rank() == 0:
+        print(json.dumps(summary, indent=2))
+    return 0
+
+
+def _run_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("scenario", help=SCENARIO_HELP)
+    p.add_argument("--out", help="output folder (default: out/<scenario name>)")
+    p.add_argument("--mesh-size", type=float, default=None, metavar="H",
+                   help="element size at the pile surfaces in m (overrides numerics.mesh.size_m)")
+    p.add_argument("--set", action="append", metavar="KEY=VALUE", help=SET_HELP)
+    p.add_argument("--stop-after", choices=["mesh", "solve"], default="solve",
+                   help="mesh: validate and mesh only (writes scenario.json, mesh/ and "
+                   "summary.json); solve (default): run every stage")
+    p.add_argument("--resume", action="store_true",
+                   help="continue from the last checkpoint in --out (same scenario, --set "
+                   "values and rank count); a complete run is not run again")
+    p.set_defaults(func=_cmd_run)
+
+
+def _cmd_mesh(args: argparse.Namespace) -> int:
+    from mpi4py import MPI
+
+    from pilegroup.geometry.adapter import geometry_spec
+    from pilegroup.geometry.output import format_summary, mesh_command
+
+    sc = load_scenario(args.scenario, _overrides(args))
+    out = Path(args.out) if args.out else Path("out") / sc.name / "mesh"
+    summary = mesh_command(geometry_spec(sc, args.mesh_size), None, out, MPI.COMM_WORLD,
+                           cache_dir=False if args.no_cache else None, render=not args.no_png)
+    if _world_rank() == 0:
+        print(format_summary(summary))
+    return 0
+
+
+def _mesh_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("scenario", help=SCENARIO_HELP)
+    p.add_argument("--mesh-size", type=float, default=None, metavar="H",
+                   help="element size at the pile surfaces in m (paper: 1.0/0.8/0.6/0.3/0.1)")
+    p.add_argument("--out", help="output folder (default: out/<scenario>/mesh)")
+    p.add_argument("--set", action="append", metavar="KEY=VALUE", help=SET_HELP)
+    p.add_argument("--no-cache", action="store_true", help="re-mesh even if cached")
+    p.add_argument("--no-png", action="store_true", help="skip the PNG renders")
+    p.set_defaults(func=_cmd_mesh)
+
+
+def _cmd_verify(args: argparse.Namespace) -> int:
+    from pilegroup.studies.verification import CASES, run_cases
+
+    unknown = [c for c in args.cases if c not in CASES]
+    if unknown:
+        raise ScenarioError("CASE", unknown[0], f"unknown case; known: {', '.join(CASES)}")
+    res = run_cases(args.cases, size=args.size, json=args.json, pair=args.pair,
+                    preset=args.preset, quadrature=args.interface_quadrature)
+    return 0 if all(r.passed for r in res) else EXIT_FAILED
+
+
+def _verify_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("cases", nargs="*", metavar="CASE", help="cases to run (default: all)")
+    p.add_argument("--json", action="store_true", help="one JSON object per case")
+    p.add_argument("--size", choices=["fast", "bench"], default="fast",
+                   help="fast: small meshes (test tier); bench: benchmark sizes")
+    p.add_argument("--pair", choices=["Q2Q1", "Q1Q1"], default=None,
+                   help="element pair (default: each case's own)")
+    p.add_argument("--preset", choices=["direct", "fieldsplit_gamg"], default=None,
+                   help="linear solver option set (default: each case's own)")
+    p.add_argument("--interface-quadrature", choices=["nodal", "gauss"], default=None,
+                   help="interface cases: law at the interface nodes or at facet Gauss "
+                   "points (default: nodal)")
+    p.set_defaults(func=_cmd_verify)
+
+
+def _cmd_bench(args: argparse.Namespace) -> int:
+    if args.what == "constitutive":
+        from pilegroup.studies.bench.laws import main as bench_main
+
+        return bench_main([])
+    if args.what == "meshing":
+        from pilegroup.studies.bench.meshing import main as bench_main
+
+        return bench_main([str(h) for h in args.sizes or []] + ["--symmetry", *args.symmetry])
+    if args.what == "pier":
+        from pilegroup.studies.bench.pier_bench import bench_pier
+
+        rows = bench_pier(args.scenario, args.sizes or [1.0], args.symmetry, args.ranks or 2,
+                          args.out or "out/bench_pier", args.timeout, args.set or ())
+        return 0 if all(r["status"] == "complete" for r in rows) else 1
+    if args.what == "stability":
+        from pilegroup.studies.bench.stability import bench_stability
+
+        rows = bench_stability(args.out or "out/bench_stability", args.cases, args.ranks or 1,
+                               args.timeout or 900.0)
+        return 0 if all(r["clean"] for r in rows) else 1
+    from pilegroup.studies.bench.verification_bench import bench_verification
+
+    bench_verification(out_dir=args.out or "out/bench_verification")
+    return 0
+
+
+def _bench_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("what", choices=["constitutive", "meshing", "verification", "pier",
+                                    "stability"])
+    p.add_argument("--sizes", type=float, nargs="*", default=None, metavar="H",
+                   help="meshing: pile-surface sizes in m (default: the paper's five); "
+                   "pier: the sizes to run (default: 1.0)")
+    p.add_argument("--out", default=None, help="verification, pier, stability: output folder")
+    p.add_argument("--scenario", default="pier667", help="pier: the scenario to run")
+    p.add_argument("--symmetry", nargs="*", default=["auto"],
+                   help="pier, meshing: the numerics.symmetry values to run (default: auto,"
+                   " the part the geometry's symmetry allows)")
+    p.add_argument("--ranks", type=int, default=None,
+                   help="pier, stability: MPI ranks of each run (default: 2 for pier, 1 for "
+                   "stability)")
+    p.add_argument("--timeout", type=float, default=None, metavar="S",
+                   help="pier, stability: seconds each run may take before it is killed "
+                   "(default: no limit for pier, 900 for stability)")
+    p.add_argument("--cases", nargs="*", default=None, metavar="CASE",
+                   help="stability: the cases to run (default: all)")
+    p.add_argument("--set", action="append", metavar="KEY=VALUE",
+                   help="pier: a scenario key for every run, e.g. "
+                   "numerics.solver.preset=fieldsplit_pier (repeatable)")
+    p.set_defaults(func=_cmd_bench)
+
+
+def _cmd_report(args: argparse.Namespace) -> int:
+    from pilegroup.studies.report.run_report import results_markdown, write_report
+
+    out = Path(args.out_dir)
+    paths = write_report(out)
+    for path in paths:
+        print(path)
+    if args.markdown:
+        md = Path(args.markdown)
+        rel = Path(os.path.relpath(out / "plots", md.parent)).as_posix()
+        print(write_text_atomic(md, results_markdown(out, rel)))
+    return 0
+
+
+def _report_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("out_dir", metavar="OUT_DIR", help="run output folder, e.g. out/pier667")
+    p.add_argument("--markdown", metavar="FILE", default=None,
+                   help="also write the results section (Markdown) to FILE; image links are "
+                   "relative to FILE's folder")
+    p.set_defaults(func=_cmd_report)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser of the ``pilegroup`` command."""
+    p = argparse.ArgumentParser(
+        prog="pilegroup",
+        description="3D simulation of pile groups in layered soft soil over time: Biot "
+        "consolidation, elastoplastic soil, elastic piles and cap, viscoplastic pile-soil "
+        "interface (DOLFINx, gmsh, PETSc). Scenarios are TOML files whose keys carry their "
+        "unit; bundled scenarios: " + ", ".join(BUNDLED) + ".",
+        epilog="Under MPI: mpirun -n 2 pilegroup run pier667. Exit codes: 0 ok, 1 run failed, "
+        "2 invalid input, 143/130 stopped by SIGTERM/SIGINT (checkpoint saved; --resume).",
+    )
+    p.add_argument("-v", "--verbose", action="count", default=0, help="more log output")
+    sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    for name, help_, add_arguments in (
+        ("scenario", "show or validate scenario files", _scenario_arguments),
+        ("run", "run a scenario (main job)", _run_arguments),
+        ("mesh", "build the all-hexahedral mesh of a scenario", _mesh_arguments),
+        ("verify", "run verification cases against closed forms", _verify_arguments),
+        ("bench", "benchmarks that print tables (not tests)", _bench_arguments),
+        ("report", "plots and a Markdown summary of a run's output folder", _report_arguments),
+    ):
+        add_arguments(sub.add_parser(name, help=help_, description=DESCRIPTIONS[name]))
+    for name, help_, description, add_arguments in BATCH_COMMANDS:
+        add_arguments(sub.add_parser(name, help=help_, description=description))
+    return p
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``pilegroup`` console script; returns the exit code."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    setup_logging(args.verbose)
+    try:
+        return int(args.func(args) or 0)
+    except ScenarioError as exc:  # raised on every rank alike: rank 0 tells
+        _say(f"pilegroup: invalid input: {exc}")
+        return EXIT_INPUT
+    except RunInterrupted as exc:  # every rank alike; one line from rank 0
+        _say(f"pilegroup: {exc}; resume with: {_resume_command(argv)}")
+        return 128 + exc.signum
+    except PilegroupError as exc:
+        _say(f"pilegroup: failed: {exc}")
+        return EXIT_FAILED
+    except Exception as exc:  # a failure that may be one rank's alone: end every rank
+        return _abort(exc, args.verbose)
+
+
+def _resume_command(argv: Sequence[str] | None) -> str:
+    """The command line that resumes this run: ``[mpirun -n N] pilegroup ARGS --resume``."""
+    from mpi4py import MPI
+
+    args = list(sys.argv[1:] if argv is None else argv)
+    ranks = MPI.COMM_WORLD.size
+    mpi = ["mpirun", "-n", str(ranks)] if ranks > 1 else []
+    return shlex.join([*mpi, "pilegroup", *args] + ([] if "--resume" in args else ["--resume"]))
+
+
+def _say(line: str) -> None:
+    """One line on stderr from rank 0 of a collective failure (not one per rank)."""
+    if _world_rank() == 0:
+        print(line, file=sys.stderr, flush=True)
+
+
+def _abort(exc: Exception, verbose: bool) -> int:
+    """One line naming the rank and the error; under MPI every rank is ended (no hang)."""
+    from mpi4py import MPI
+
+    comm = MPI.COMM_WORLD
+    where = f"rank {comm.rank} of {comm.size}" if comm.size > 1 else "run"
+    if verbose:
+        traceback.print_exc()
+    line = f"pilegroup: {where} failed: {type(exc).__name__}: {exc}"
+    if comm.size > 1:
+        abort_job(line, EXIT_FAILED)
+    else:
+        print(line, file=sys.stderr, flush=True)
+    return EXIT_FAILED
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,1 @@
+"""Figures and Markdown of one run folder: plots, the 3D view, the paper's reported values."""

@@ -1,0 +1,125 @@
+"""The CSV files of a run folder: their names and columns (the data contract) and a reader.
+
+The writers take their header lines from here and the report reads the files with
+:func:`read_csv`, so both sides use one list of columns. Depths in m below the ground surface,
+positive down; forces kN; stresses kPa; displacements m.
+
+* ``settlement.csv``: ``t_day,stage,settlement_m`` (cap settlement, down positive);
+* ``pile_profiles.csv``: ``t_day,pile,depth_m,layer,axial_force_kN,shaft_friction_kPa,
+  relative_displacement_m`` (axial force compression positive; friction positive = the soil
+  supports the pile; relative displacement = pile minus adjacent soil settlement, positive = the
+  pile moves down relative to the soil);
+* ``layer_history.csv``: ``t_day,pile,layer,layer_name,depth_top_m,depth_bottom_m,
+  shaft_friction_kPa,relative_displacement_m,viscoplastic_slip_m,normal_traction_kPa`` (layer
+  means on the shaft of the centre pile, every accepted step);
+* ``interface_layers.csv``: the columns of ``layer_history.csv``, every pile at the output
+  times;
+* ``pile_loads.csv``: ``t_day,pile,x_m,y_m,head_force_kN``;
+* ``load_settlement.csv``: ``t_day,stage,load_factor,load_kN,settlement_m`` (every accepted
+  step: the load–settlement curve, also of a run that found no equilibrium beyond some load);
+* ``gauges.csv``: ``time_day,pile,section,depth_m,strain,N_kN,f_kPa,w_mm`` (the virtual strain
+  gauges reduced by the paper's field method, :mod:`pilegroup.studies.results.gauges`: section-mean
+  axial strain, compression positive; axial force; friction of the interval from the section
+  down to the next one, NaN at the last section; relative displacement, mm), then the model's
+  own values at the same sections ``N_model_kN,f_model_kPa,w_model_mm`` (axial force from the
+  pile stress, interface shear averaged over the same interval, pile minus adjacent soil
+  displacement), ``w_pile_mm`` (the model's pile settlement there) and the errors of the field
+  method, field minus model: ``N_error_kN,f_error_kPa,w_error_mm``; every pile, every output
+  time.
+"""
+
+from __future__ import annotations
+
+import csv
+from pathlib import Path
+
+import numpy as np
+
+from pilegroup.model import ScenarioError
+
+SETTLEMENT_CSV = "settlement.csv"
+PROFILES_CSV = "pile_profiles.csv"
+LAYER_HISTORY_CSV = "layer_history.csv"
+INTERFACE_LAYERS_CSV = "interface_layers.csv"
+LOADS_CSV = "pile_loads.csv"
+LOAD_SETTLEMENT_CSV = "load_settlement.csv"
+GAUGES_CSV = "gauges.csv"
+
+_LAYER_MEANS = ("t_day", "pile", "layer", "layer_name", "depth_top_m", "depth_bottom_m",
+                "shaft_friction_kPa", "relative_displacement_m", "viscoplastic_slip_m",
+                "normal_traction_kPa")
+
+#: Columns of each CSV file, in the order the writers write them (a reader ignores extra ones).
+COLUMNS: dict[str, tuple[str, ...]] = {
+    SETTLEMENT_CSV: ("t_day", "stage", "settlement_m"),
+    PROFILES_CSV: ("t_day", "pile", "depth_m", "layer", "axial_force_kN", "shaft_friction_kPa",
+                   "relative_displacement_m"),
+    LAYER_HISTORY_CSV: _LAYER_MEANS,
+    INTERFACE_LAYERS_CSV: _LAYER_MEANS,
+    LOADS_CSV: ("t_day", "pile", "x_m", "y_m", "head_force_kN"),
+    LOAD_SETTLEMENT_CSV: ("t_day", "stage", "load_factor", "load_kN", "settlement_m"),
+    GAUGES_CSV: ("time_day", "pile", "section", "depth_m", "strain", "N_kN", "f_kPa", "w_mm",
+                 "N_model_kN", "f_model_kPa", "w_model_mm", "w_pile_mm", "N_error_kN",
+                 "f_error_kPa", "w_error_mm"),
+}
+#: The columns that hold text; all others hold numbers.
+TEXT_COLUMNS = frozenset({"stage", "layer_name"})
+
+#: Header lines of the writers.
+SETTLEMENT_COLUMNS = ",".join(COLUMNS[SETTLEMENT_CSV])
+PROFILE_COLUMNS = ",".join(COLUMNS[PROFILES_CSV])
+LAYER_COLUMNS = ",".join(_LAYER_MEANS)
+LOAD_COLUMNS = ",".join(COLUMNS[LOADS_CSV])
+LOAD_SETTLEMENT_COLUMNS = ",".join(COLUMNS[LOAD_SETTLEMENT_CSV])
+GAUGE_COLUMNS = ",".join(COLUMNS[GAUGES_CSV])
+#: The value columns of ``gauges.csv`` (after time, pile, section and depth).
+GAUGE_VALUES = COLUMNS[GAUGES_CSV][4:]
+
+#: A CSV file read by :func:`read_csv`: column name -> values (float, or str for text columns).
+Table = dict[str, np.ndarray]
+
+
+def _columns_error(path: Path, header: list[str], problem: str) -> ScenarioError:
+    required = ", ".join(COLUMNS[path.name])
+    return ScenarioError(f"{path} header", ",".join(header),
+                         f"{problem}; required columns: {required}")
+
+
+def read_csv(path: Path) -> Table | None:
+    """Columns of a contract CSV as arrays (text or float); ``None`` if the file does not exist.
+
+    The file name selects the columns (:data:`COLUMNS`). Raises :class:`ScenarioError` for an
+    empty file, a missing column, a short row or a non-numeric value, naming the file, the column
+    and the columns required. An empty cell is a quantity that does not exist there (e.g. the
+    friction below the last gauge section): NaN in the array; no file holds the text "nan".
+    """
+    if not path.is_file():
+        return None
+    with path.open(newline="", encoding="utf-8") as fh:
+        rows = [r for r in csv.reader(fh) if any(x.strip() for x in r)]
+    header = [h.strip() for h in rows[0]] if rows else []
+    if not header:
+        raise _columns_error(path, header, "no header row")
+    missing = [c for c in COLUMNS[path.name] if c not in header]
+    if missing:
+        raise _columns_error(path, header, f"missing column {missing[0]!r}")
+    body = rows[1:]
+    for n, row in enumerate(body, start=2):
+        if len(row) < len(header):
+            raise ScenarioError(f"{path} row {n}", ",".join(row),
+                                f"{len(row)} fields, the header has {len(header)}")
+    table: Table = {}
+    for c in COLUMNS[path.name]:
+        i = header.index(c)
+        if c in TEXT_COLUMNS:
+            table[c] = np.array([r[i].strip() for r in body], dtype=str)
+            continue
+        vals = np.empty(len(body))
+        for n, row in enumerate(body, start=2):
+            try:
+                vals[n - 2] = float(row[i]) if row[i].strip() else np.nan
+            except ValueError:
+                raise ScenarioError(f"{path} row {n}", row[i].strip(),
+                                    f"column {c!r} must be a number") from None
+        table[c] = vals
+    return table

@@ -1,0 +1,1 @@
+"""One run: scenario -> mesh -> problem -> stages -> exports, with its probes and checkpoints."""

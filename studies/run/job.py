@@ -1,0 +1,140 @@
+"""The main job: one scenario through every stage that exists, outputs to one folder."""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import time
+from pathlib import Path
+from typing import Any
+
+from mpi4py import MPI
+
+from pilegroup.errors import PilegroupError, RunInterrupted, ScenarioError
+from pilegroup.fileio import write_json_atomic
+from pilegroup.geometry.adapter import geometry_spec
+from pilegroup.geometry.convert import build_mesh
+from pilegroup.geometry.output import mesh_outputs
+from pilegroup.geometry.spec import GeometrySpec
+from pilegroup.model import Scenario
+from pilegroup.studies.report.run_report import write_report
+from pilegroup.studies.run.checkpoint import check_resume, completed_summary, remove_checkpoint
+from pilegroup.studies.run.pipeline import run_coupled
+
+log = logging.getLogger(__name__)
+
+
+def run_scenario(sc: Scenario, out: Path, mesh_size: float | None = None,
+                 stop_after: str = "solve", comm: MPI.Comm = MPI.COMM_WORLD,
+                 resume: bool = False) -> dict[str, Any]:
+    """Run scenario ``sc`` on ``comm`` and write its outputs to ``out``; returns the summary.
+
+    Validate, write the resolved scenario (``scenario.json``), build the mesh once and write
+    its outputs (``mesh/``: XDMF with tags, PNG renders, counts and quality), run every stage
+    on it (unless ``stop_after = "mesh"``), write ``summary.json`` and the report's plots.
+    ``summary.json`` is always written: ``status`` is ``complete``, ``failed`` (with the
+    reason) or ``interrupted`` (a stop request; with the time reached and the checkpoint); the
+    files of every output time reached stay complete.
+
+    ``resume``: continue from ``out``'s checkpoint (same scenario and rank count, else
+    :class:`~pilegroup.errors.ScenarioError`); a run whose ``summary.json`` says complete is
+    not run again (its summary is returned). Without it, an older checkpoint in ``out`` is
+    removed first.
+    """
+    t0 = time.perf_counter()
+    if mesh_size is not None:
+        sc = dataclasses.replace(sc, numerics=dataclasses.replace(
+            sc.numerics, mesh=dataclasses.replace(sc.numerics.mesh, size_m=mesh_size)))
+    if resume and stop_after != "solve":
+        raise ScenarioError("--stop-after", stop_after, "only 'solve' with --resume")
+    manifest = check_resume(out, sc, comm) if resume else None
+    if manifest is not None:
+        done = completed_summary(out, comm)
+        if done is not None:
+            if comm.rank == 0:
+                log.info("the run in %s is complete (t = %g day); nothing to resume", out,
+                         manifest["t_day"])
+            return done
+    if comm.rank == 0:
+        out.mkdir(parents=True, exist_ok=True)
+        write_json_atomic(out / "scenario.json", sc)
+        if manifest is None:
+            remove_checkpoint(out)
+    spec = geometry_spec(sc)
+    try:
+        summary = _run(sc, spec, out, stop_after, comm, t0, manifest)
+    except RunInterrupted as exc:
+        _write_interrupted(out, sc, comm, exc, t0)
+        raise
+    except Exception as exc:
+        _write_failure(out, sc, comm, exc, t0)
+        if isinstance(exc, PilegroupError) and comm.rank == 0 and sc.outputs.plots:
+            _plots_of_what_was_reached(out)
+        raise
+    if comm.rank == 0 and summary["solver"] is not None and sc.outputs.plots:
+        for path in write_report(out):
+            log.info("wrote %s", path)
+    return summary
+
+
+def _run(sc: Scenario, spec: GeometrySpec, out: Path, stop_after: str, comm: MPI.Comm,
+         t0: float, resume: dict[str, Any] | None) -> dict[str, Any]:
+    """Mesh and solve; writes ``summary.json`` with ``status = "complete"``."""
+    t_mesh = time.perf_counter()
+    md = build_mesh(spec, comm)
+    mesh = mesh_outputs(md, spec, out / "mesh", t0=t_mesh)
+    solved = run_coupled(sc, md, out, resume=resume) if stop_after == "solve" else None
+    summary: dict[str, Any] = {
+        "scenario": sc.name,
+        "status": "complete",
+        "stages_done": ["validate", "mesh"] + ([st.name for st in sc.stages] if solved else []),
+        "solver": solved,
+        "mesh": {k: mesh[k] for k in ("h_m", "cells", "vertices", "min_scaled_jacobian",
+                                      "shaft_groups", "files")},
+        "ranks": comm.size,
+        "wall_s": time.perf_counter() - t0,
+    }
+    if comm.rank == 0:
+        write_json_atomic(out / "summary.json", summary)
+        log.info("wrote %s", out / "summary.json")
+    return summary
+
+
+def _plots_of_what_was_reached(out: Path) -> None:
+    """The report's figures of a run that stopped (e.g. its load–settlement curve)."""
+    try:
+        for path in write_report(out):
+            log.info("wrote %s", path)
+    except (PilegroupError, OSError, ValueError, KeyError) as exc:  # the failure stays the news
+        log.warning("no plots of the stopped run: %s", exc)
+
+
+def _write_interrupted(out: Path, sc: Scenario, comm: MPI.Comm, exc: RunInterrupted,
+                       t0: float) -> None:
+    """``summary.json`` with ``status = "interrupted"``: the signal, time reached, checkpoint."""
+    if comm.rank == 0:
+        write_json_atomic(out / "summary.json", {
+            "scenario": sc.name, "status": "interrupted", "signal": exc.signal_name,
+            "t_day": exc.t, "stage": exc.stage, "checkpoint": exc.checkpoint,
+            "resume": "pilegroup run SCENARIO --out OUT --resume (same scenario, --set "
+                      "values and rank count)",
+            "ranks": comm.size, "wall_s": time.perf_counter() - t0,
+            "solver_summary": "summary_solver.json (written up to the last output time)"})
+
+
+def _write_failure(out: Path, sc: Scenario, comm: MPI.Comm, exc: BaseException,
+                   t0: float) -> None:
+    """``summary.json`` with ``status = "failed"`` and the reason.
+
+    A :class:`~pilegroup.errors.PilegroupError` is raised on every rank alike (rank 0 writes);
+    any other exception may be one rank's alone, so that rank writes.
+    """
+    collective = isinstance(exc, PilegroupError)
+    if collective and comm.rank != 0:
+        return
+    write_json_atomic(out / "summary.json", {
+        "scenario": sc.name, "status": "failed",
+        "reason": f"{type(exc).__name__}: {exc}",
+        "rank": None if collective else comm.rank, "ranks": comm.size,
+        "wall_s": time.perf_counter() - t0,
+        "solver_summary": "summary_solver.json (written up to the last output time)"})

@@ -1,0 +1,314 @@
+"""A scenario as a coupled Biot problem, and the one way a scenario's stages are run.
+
+The one place that maps :class:`~pilegroup.model.Scenario` onto the solver's inputs. The piles
+and cap are elastic solids, either tied to the soil (one displacement field; ``interface.mode =
+"tied"``, which also bonds the cap bottom to the ground surface) or on their own displacement
+field joined to the soil by the interface law of each layer (``elastic``/``viscoplastic``; the
+cap is then not in contact with the soil).
+Boundaries (docs/model.md): bottom fixed, sides roller, ground surface drained (p = 0); every
+other boundary impermeable. The cap load is a uniform pressure on the cap top (or on the pile
+heads when there is no cap).
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import os
+import time
+from pathlib import Path
+from typing import Any
+
+from tqdm import tqdm
+
+from pilegroup.constitutive.interface_law import PileSoilInterface
+from pilegroup.constitutive.soil import DruckerPrager, LinearElastic, MohrCoulomb
+from pilegroup.errors import StepFailure
+from pilegroup.geometry import groups
+from pilegroup.geometry.adapter import geometry_spec, resolve_symmetry
+from pilegroup.geometry.meshdata import MeshData
+from pilegroup.geometry.symmetry import PLANES
+from pilegroup.model import Scenario, ScenarioError
+from pilegroup.solver import (
+    BiotProblem,
+    Discretisation,
+    DisplacementBC,
+    ElasticSolid,
+    Export,
+    InterfaceCoupling,
+    NewtonOptions,
+    PressureBC,
+    RunLog,
+    SoilMaterial,
+    SolverOptions,
+    Stage,
+    SummaryWriter,
+    SurfaceLoad,
+    TimeStepping,
+    XDMFSeries,
+    run_stages,
+    run_summary,
+)
+from pilegroup.solver.probes import facet_area
+from pilegroup.studies.results.tables import GAUGES_CSV
+from pilegroup.studies.run.checkpoint import Checkpoints
+from pilegroup.studies.run.gauge_probe import GaugeProbe
+from pilegroup.studies.run.pile_probe import LoadSettlementCurve, PileProbe, SettlementSeries
+
+log = logging.getLogger(__name__)
+
+#: Largest displacement (m) the geostatic equilibrium check accepts. With the interface, the
+#: nodal (lumped) in-situ tractions balance the Gauss-integrated soil stress only to a small
+#: residual whose source is not yet pinned down: measured 2.7e-6 m (coarse single-pile test
+#: mesh, at the pile toe) and 1.1e-5 m (pier667 default mesh), against settlements of
+#: centimetres. Tied piles: < 1e-9 m.
+GEOSTATIC_TOL_M = 1e-4
+
+#: Below this many unknowns the ``auto`` preset uses one MUMPS factorisation per Newton matrix
+#: (``direct``); above, ``direct_reuse`` (one factorisation serves many solves: the quarter
+#: pier at h = 1 m, 80,853 unknowns, needs 6 factorisations for its 29 Newton iterations). Both
+#: are measured to converge on the pier system; ``fieldsplit_gamg`` is not (docs/benchmarks.md),
+#: so ``auto`` never picks it.
+DIRECT_MAX_DOFS = 50_000
+
+#: Width (m) of the soil around the pile–soil interface that ``fieldsplit_pier`` solves exactly
+#: with the structure (:func:`band_layers`).
+BAND_WIDTH_M = 2.0
+
+
+def auto_preset(dofs: int) -> str:
+    """The linear-solver preset ``auto`` stands for a system of ``dofs`` unknowns.
+
+    ``fieldsplit_pier`` is not chosen: it converges on the full Pier 667 model at h = 1 m and
+    0.3 m (at most 47 FGMRES iterations per solve at both) in about two thirds of the kept
+    LU's memory (6.6 against 9.8 GB on the largest rank at 0.3 m), but the sizes ``auto``
+    meets with the bundled scenario (the quarter model) run faster on the kept LU; selecting
+    it is the user's call for full models that the LU does not fit (docs/benchmarks.md).
+    """
+    return "direct" if dofs <= DIRECT_MAX_DOFS else "direct_reuse"
+
+
+def band_layers(h: float) -> int:
+    """Cell layers of soil in the exact block of ``fieldsplit_pier`` at pile mesh size ``h``.
+
+    Enough layers of the size ``h`` (m, at the pile surfaces) for :data:`BAND_WIDTH_M`. On the
+    full Pier 667 the iterations follow the band's width, not its layer count: two
+    layers at h = 1 m and six at h = 0.3 m need about the same (docs/benchmarks.md, "The band
+    and the smoother against the mesh size"), while two at 0.3 m need 60 % more.
+    """
+    return max(1, math.ceil(BAND_WIDTH_M / h - 1e-9))
+
+
+def soil_law(sc: Scenario, j: int) -> LinearElastic | MohrCoulomb | DruckerPrager:
+    """The constitutive law of soil layer ``j`` (kPa, degrees) by ``soil.model``."""
+    lay = sc.layers[j]
+    if sc.soil.model == "linear_elastic":
+        return LinearElastic(lay.E, lay.nu)
+    cls = MohrCoulomb if sc.soil.model == "mohr_coulomb" else DruckerPrager
+    return cls(lay.E, lay.nu, lay.c_kPa, lay.phi_deg, lay.psi_deg)
+
+
+def build_problem(sc: Scenario, md: MeshData, preset: str | None = None,
+                  mesh_size: float | None = None) -> BiotProblem:
+    """The :class:`~pilegroup.solver.problem.BiotProblem` of scenario ``sc`` on mesh ``md``."""
+    if sc.site.water_table_depth_m != 0.0:
+        raise ScenarioError("site.water_table_depth_m", sc.site.water_table_depth_m,
+                            "only 0 (water table at the ground surface) is supported so far", "m")
+    materials: dict[str, SoilMaterial | ElasticSolid] = {}
+    for j, lay in enumerate(sc.layers):
+        materials[groups.soil_layer(j + 1)] = SoilMaterial(
+            soil_law(sc, j), lay.k_m_per_day, lay.porosity, lay.gamma_kN_per_m3, K0=lay.K0)
+    solid = ElasticSolid(sc.structure.E, sc.structure.nu)
+    for name in md.cell_names:
+        if groups.is_structure(name):
+            materials[name] = solid
+    # rollers on the block sides and on the symmetry planes of a reduced model (its flux is
+    # zero there, the natural condition of the mass balance)
+    rollers = ((groups.SIDE_XMIN, 0), (groups.SIDE_XMAX, 0), (groups.SIDE_YMIN, 1),
+               (groups.SIDE_YMAX, 1), (groups.SYM_X, 0), (groups.SYM_Y, 1))
+    dbcs = [DisplacementBC(f, c) for f, c in rollers if f in md.facet_names]
+    dbcs += [DisplacementBC(groups.BOTTOM, c) for c in range(3)]
+    names = load_facets(sc, md)
+    loads = [SurfaceLoad(f, sc.total_cap_load() / full_load_area(sc, md, mesh_size))
+             for f in names]
+    disc = Discretisation(sc.numerics.element)
+    p = preset or sc.numerics.solver.preset
+    if p == "auto":
+        p = auto_preset(estimate_dofs(md, sc.numerics.element))
+    num = sc.numerics
+    newton = NewtonOptions(rtol=num.newton_rtol, atol=num.newton_atol, max_it=num.time.max_newton)
+    h = mesh_size or num.mesh.size_m
+    opts = SolverOptions(preset=p, overrides=dict(num.solver.options), newton=newton,
+                         band_layers=band_layers(h))
+    return BiotProblem(md, materials, disc, displacement_bcs=dbcs,
+                       pressure_bcs=[PressureBC(groups.GROUND)], loads=loads, options=opts,
+                       interface=interface_coupling(sc, h))
+
+
+def full_load_area(sc: Scenario, md: MeshData, mesh_size: float | None = None) -> float:
+    """Area (m^2) of the loaded top of the whole foundation (cap top, or every pile head).
+
+    With a cap, its plan area. Without one, the meshed pile heads (polygons slightly smaller
+    than circles, so that the resultant is exactly the scenario's load); a symmetry-reduced mesh
+    holds 1/2 (one mirror plane) or 1/4 (two) of them. A uniform pressure of total load / this
+    area then carries the reduced model's share of the load.
+    """
+    if sc.cap is not None:
+        return sc.cap.size_x_m * sc.cap.size_y_m
+    held = 0.5 ** len(geometry_spec(sc, mesh_size).cut_planes())
+    return facet_area(md, load_facets(sc, md)) / held
+
+
+def interface_law(sc: Scenario, j: int, mesh_size: float) -> PileSoilInterface | None:
+    """The pile-soil interface law of soil layer ``j`` (Table 1 parameters of that layer).
+
+    ``k_normal = normal_stiffness_factor * E_layer / h`` with ``h`` the element size at the
+    pile surfaces; ``interface.mode = "elastic"`` drops the viscoplastic slip.
+    """
+    lay = sc.layers[j]
+    ip = lay.interface
+    if ip is None:
+        return None
+    opt = sc.interface
+    return PileSoilInterface(
+        K=ip.K, n=ip.n, R_f=ip.R_f, c=lay.c_kPa, phi_deg=lay.phi_deg, eta=ip.eta,
+        k_normal=opt.normal_stiffness_factor * lay.E / mesh_size, delta_deg=ip.delta_deg,
+        N=opt.N, variant=opt.variant, integrator=opt.integrator,
+        viscous=opt.mode == "viscoplastic")
+
+
+def interface_coupling(sc: Scenario, mesh_size: float | None = None
+                       ) -> InterfaceCoupling | None:
+    """Separate pile/soil fields joined by the interface law, or ``None`` (``tied``)."""
+    if sc.interface.mode == "tied":
+        return None
+    if not sc.interface.base:
+        raise ScenarioError("interface.base", False, "only true (a pile base interface) is "
+                            "supported with interface.mode = elastic/viscoplastic", "-")
+    h = mesh_size or sc.numerics.mesh.size_m
+    laws = tuple(interface_law(sc, j, h) for j in range(len(sc.layers)))
+    return InterfaceCoupling(laws + laws, quadrature=sc.interface.quadrature)
+
+
+def load_facets(sc: Scenario, md: MeshData) -> list[str]:
+    """Facet groups that carry the cap load: the cap top, or the pile heads without a cap."""
+    return [groups.CAP_TOP] if sc.cap is not None else groups.heads(md.facet_names)
+
+
+def estimate_dofs(md: MeshData, element: str) -> int:
+    """Rough global unknown count of the u-p problem (vertices, or Q2 nodes ~ 8 x vertices)."""
+    nv = md.mesh.topology.index_map(0).size_global
+    return int(nv * (3 * (8 if element == "Q2Q1" else 1) + 1))
+
+
+def solver_stages(sc: Scenario) -> list[Stage]:
+    """The scenario's stages as solver stages (load factor 1 = the full cap load)."""
+    out = []
+    total = sc.total_cap_load()
+    for st, t0, t1 in sc.stage_times():
+        if st.kind == "geostatic":
+            out.append(Stage(st.name, "geostatic"))
+        elif st.kind == "load":
+            lf = st.cap_load_kN / total if total > 0 else 0.0  # type: ignore[operator]
+            out.append(Stage(st.name, "load", duration=t1 - t0, load_factor=lf))
+        else:
+            out.append(Stage(st.name, "consolidation", duration=t1 - t0))
+    return out
+
+
+def time_stepping(sc: Scenario) -> TimeStepping:
+    """The solver's adaptive stepping rules from ``numerics.time`` and ``time.output_days``."""
+    t = sc.numerics.time
+    return TimeStepping(dt0=t.dt_initial_day, dt_min=t.dt_min_day, dt_max=t.dt_max_day,
+                        grow=t.grow_factor, cut=t.cut_factor, easy_newton=t.easy_newton,
+                        milestones=tuple(x for x in sc.time.output_days if x > 0))
+
+
+def xdmf_label(symmetry: str) -> str | None:
+    """XDMF grid name of a reduced model: the part it holds and how to see the whole.
+
+    The files hold the reduced domain (smaller files; ParaView's Reflect filter about the named
+    planes shows the whole foundation); ``None`` (the default name) for the full model.
+    """
+    planes = PLANES[symmetry]
+    if not planes:
+        return None
+    part = "_".join(f"{a}_ge_0" for a in planes)
+    return f"{symmetry}_model_{part}_reflect_about_" + "_and_".join(f"{a}0" for a in planes)
+
+
+def run_coupled(sc: Scenario, md: MeshData, out: Path, preset: str | None = None,
+                mesh_size: float | None = None, resume: dict[str, Any] | None = None
+                ) -> dict[str, Any]:
+    """Run every stage of ``sc`` on ``md`` with the scenario's exports; returns the summary.
+
+    Exports, written at every output time: ``settlement.csv``, the pile tables
+    (:class:`~pilegroup.studies.run.pile_probe.PileProbe`), ``gauges.csv`` (when the scenario has
+    ``outputs.gauge_depths_m``: :class:`~pilegroup.studies.run.gauge_probe.GaugeProbe`),
+    ``results*.xdmf`` (when ``outputs.xdmf``) and ``summary_solver.json`` (``complete: false``
+    until the end, then the full run summary; after a :class:`~pilegroup.errors.StepFailure`
+    the summary up to the failure, with the message as ``failure``). Checkpoints
+    (:class:`~pilegroup.studies.run.checkpoint.Checkpoints`) at every output time, every
+    ``outputs.checkpoint_every_min`` and on a stop request (which ends the run with
+    :class:`~pilegroup.errors.RunInterrupted`). ``resume``: the manifest of the checkpoint to
+    continue from (:func:`~pilegroup.studies.run.checkpoint.check_resume`).
+    """
+    t0 = time.perf_counter()
+    symmetry = resolve_symmetry(sc)
+    pb = build_problem(sc, md, preset, mesh_size)
+    settlement = SettlementSeries(pb, load_facets(sc, md), out / "settlement.csv")
+    piles = PileProbe(sc, pb, out)
+    gauges = GaugeProbe(sc, pb, piles, out / GAUGES_CSV) if sc.outputs.gauge_depths_m else None
+
+    def summary(complete: bool) -> dict[str, Any]:
+        return {"complete": complete, "dofs": pb.num_dofs, "centre_pile": piles.centre,
+                "interface_mode": sc.interface.mode,
+                "symmetry": {"model": symmetry[0], "reason": symmetry[1]},
+                "element": sc.numerics.element, "preset": pb.linear_solver.preset,
+                "gauge_sections": gauges.summary() if gauges is not None else None,
+                "settlement_m": [{"t_day": t, "stage": s, "settlement_m": w}
+                                 for t, s, w in settlement.history],
+                "settlement_sign": "positive = downward (compression-positive habit)",
+                "resumed_from_day": resume["t_day"] if resume is not None else None,
+                "checkpoints": ckpt.written, "wall_s": time.perf_counter() - t0}
+
+    writer = SummaryWriter(out / "summary_solver.json", pb.comm, summary)
+    curve = LoadSettlementCurve(pb, settlement.probe, sc.total_cap_load(),
+                                out / "load_settlement.csv")
+    exports: list[Export] = [settlement, piles, curve]
+    if gauges is not None:
+        exports.append(gauges)
+    if sc.outputs.xdmf:
+        exports.append(XDMFSeries(pb, out / "results.xdmf", xdmf_label(symmetry[0]),
+                                  resume=resume is not None))
+    exports.append(writer)
+    stages = solver_stages(sc)
+    ckpt = Checkpoints(out, sc, pb, [st.name for st in stages], exports)
+    state = ckpt.restore(resume) if resume is not None else None
+    quiet = os.environ.get("PILEGROUP_PROGRESS") == "0"  # e.g. the runs of a batch
+    bar = tqdm(total=sc.time.end_day, unit="day", desc=sc.name,
+               disable=pb.comm.rank != 0 or quiet,
+               bar_format="{desc}: {n:.3g}/{total:g} day |{bar}| {elapsed}{postfix}")
+
+    def on_step(problem: BiotProblem, t: float, stage: str) -> None:
+        piles.record_step(t)
+        curve.record(t, stage)
+        bar.n = t
+        bar.set_postfix_str(f"{stage}, settlement {1000 * settlement.probe():.2f} mm")
+
+    try:
+        run_log = run_stages(pb, stages, time_stepping(sc), on_step=on_step,
+                             geostatic_tol=GEOSTATIC_TOL_M, exports=exports, state=state,
+                             boundary=ckpt)
+    except StepFailure as exc:
+        load = exc.load_factor * sc.total_cap_load()
+        msg = (f"no equilibrium beyond load factor {exc.load_factor:.4g} ({load:.6g} kN) at "
+               f"t = {exc.t:.6g} day, {exc}")
+        if isinstance(exc.run_log, RunLog):  # the counts and extremes up to the failure
+            writer.finish(run_summary(pb, exc.run_log, summary(False) | {"failure": msg}))
+        raise StepFailure(msg, exc.t, exc.load_factor, exc.stage, exc.run_log) from exc
+    finally:
+        bar.close()
+    data = run_summary(pb, run_log, summary(True))
+    writer.finish(data)
+    return data
