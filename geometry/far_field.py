@@ -52,7 +52,8 @@ from pilegroup.geometry.quadfix import all_quads, element_quality
 from pilegroup.geometry.spec import GeometrySpec
 from pilegroup.geometry.symmetry import find_pile
 
-__all__ = ["FAR_FIELD_ALGORITHMS", "FarField", "Plan", "build_plan", "far_field", "mirror_signs"]
+__all__ = ["FAR_FIELD_ALGORITHMS", "EmittedPlan", "FarField", "build_plan", "far_field",
+           "mirror_signs"]
 
 #: gmsh 2D algorithms tried for the far field (5 Delaunay, 6 Frontal-Delaunay, 8
 #: Frontal-Delaunay for quads), all with Blossom recombination.
@@ -241,7 +242,7 @@ def far_field(spec: GeometrySpec) -> FarField:
 
 
 @dataclass
-class Plan:
+class EmittedPlan:
     """The plan view of a model in the current gmsh model.
 
     Attributes:
@@ -289,7 +290,7 @@ def _record_far_field(pv: PlanView, far: FarField) -> None:
                            - on_boundary))
 
 
-def build_plan(spec: GeometrySpec) -> Plan:
+def build_plan(spec: GeometrySpec) -> EmittedPlan:
     """Create the plan-view surfaces of ``spec``'s model at z = 0 in the current gmsh model."""
     far = far_field(spec)
     planes = spec.symmetry_planes()
@@ -305,4 +306,4 @@ def build_plan(spec: GeometrySpec) -> Plan:
             pv.split(c)
         _record_far_field(pv, far)
     surfaces = pv.emit()
-    return Plan(surfaces, far, pv.embedded)
+    return EmittedPlan(surfaces, far, pv.embedded)

@@ -1,7 +1,7 @@
 """pilegroup.solver: u–p Biot consolidation with quadrature-point soil state.
 
 Build a :class:`BiotProblem` from a ``MeshData``, materials per cell group, boundary conditions
-and loads; run :func:`run_stages` over a list of :class:`Stage` with :class:`TimeStepping`.
+and loads; run :func:`run_stages` over a list of :class:`SolverStage` with :class:`StepControl`.
 Units kN, m, day; tension positive; ``p`` = excess pore pressure (compression positive).
 """
 
@@ -30,9 +30,9 @@ from pilegroup.solver.inputs import (
     RigidPlate,
     SoilMaterial,
     SolverOptions,
-    Stage,
+    SolverStage,
+    StepControl,
     SurfaceLoad,
-    TimeStepping,
 )
 from pilegroup.solver.layout import eps_mandel
 from pilegroup.solver.linsolve import PRESETS, Preset, merged_options
@@ -63,13 +63,13 @@ __all__ = [
     "SolverError",
     "SolverInputError",
     "SolverOptions",
-    "Stage",
+    "SolverStage",
     "StepFailure",
     "StepInfo",
     "StepRecord",
     "SummaryWriter",
     "SurfaceLoad",
-    "TimeStepping",
+    "StepControl",
     "XDMFSeries",
     "eps_mandel",
     "merged_options",

@@ -1,7 +1,7 @@
 """Exports of a run: objects written at every output time by the stage runner.
 
 Protocol (:class:`Export`): built on a problem (set up), ``write(t, stage)`` at each output
-time (stage ends and ``TimeStepping.milestones``; collective), ``close()`` at the end.
+time (stage ends and ``StepControl.milestones``; collective), ``close()`` at the end.
 :class:`XDMFSeries` (fields for ParaView) and :class:`SummaryWriter` (a JSON summary rewritten
 at every output time) live here; the studies add their own (settlement, pile probes).
 

@@ -21,7 +21,7 @@ from pilegroup.solver.qpstate import QuadratureState
 
 
 @dataclass(frozen=True)
-class Layer:
+class GeostaticLayer:
     """Elevation range (m), buoyant unit weight (kN/m^3) and K0 of one soil group."""
 
     z_min: float
@@ -43,8 +43,8 @@ class SoilColumn:
         comm = md.mesh.comm
         gx = md.mesh.geometry.x
         cdm = md.mesh.geometry.dofmaps[0]
-        self.layers: list[Layer] = []
-        self.by_name: dict[str, Layer] = {}
+        self.layers: list[GeostaticLayer] = []
+        self.by_name: dict[str, GeostaticLayer] = {}
         for name, mat in materials.items():
             if not isinstance(mat, SoilMaterial):
                 continue
@@ -52,7 +52,7 @@ class SoilColumn:
             z = gx[cdm[cells].reshape(-1), 2] if cells.size else None
             zmin = comm.allreduce(float(z.min()) if z is not None else np.inf, op=MPI.MIN)
             zmax = comm.allreduce(float(z.max()) if z is not None else -np.inf, op=MPI.MAX)
-            layer = Layer(zmin, zmax, mat.gamma_sat - GAMMA_W, mat.k0)
+            layer = GeostaticLayer(zmin, zmax, mat.gamma_sat - GAMMA_W, mat.k0)
             self.layers.append(layer)
             self.by_name[name] = layer
         self.z_top = max(lay.z_max for lay in self.layers) if self.layers else 0.0

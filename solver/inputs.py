@@ -238,7 +238,7 @@ class SolverOptions:
 
 
 @dataclass(frozen=True)
-class TimeStepping:
+class StepControl:
     """Adaptive backward-Euler steps, days.
 
     Attributes:
@@ -330,7 +330,7 @@ class RigidPlate:
 
 
 @dataclass(frozen=True)
-class Stage:
+class SolverStage:
     """One stage of the analysis.
 
     Attributes:

@@ -243,7 +243,7 @@ def check_reason(ksp: PETSc.KSP, what: str = "linear solve") -> int:
     return int(ksp.getIterationNumber())
 
 
-class LinearSolver:
+class KSPSolver:
     """The problem's KSP from a preset, with factorisation reuse and a fallback preset.
 
     Presets with ``reuse_factor_its`` keep the last LU factorisation as the preconditioner of

@@ -46,7 +46,7 @@ from pilegroup.solver.inputs import (
 from pilegroup.solver.interface import NodalInterface
 from pilegroup.solver.interface_gauss import GaussInterface
 from pilegroup.solver.layout import BlockLayout, Body
-from pilegroup.solver.linsolve import LinearSolver, get_preset
+from pilegroup.solver.linsolve import KSPSolver, get_preset
 from pilegroup.solver.newton import NewtonSolver, StepInfo
 from pilegroup.solver.qpstate import QuadratureState
 
@@ -153,7 +153,7 @@ class BiotProblem:
         self.spaces = fem.extract_function_spaces(self.F_forms)
         self.b, self.x, self.dx, self.tmp = (fpetsc.create_vector(self.spaces) for _ in range(4))
         opts = self.options
-        self.linear_solver = LinearSolver(
+        self.linear_solver = KSPSolver(
             self.comm, self.A, opts.prefix, opts.preset, opts.overrides,
             lambda spec: self.layout.splits(
                 self.A, spec.splits,

@@ -33,7 +33,7 @@ from typing import TYPE_CHECKING
 
 from pilegroup.errors import SolverError, StepFailure
 from pilegroup.solver.exports import Export
-from pilegroup.solver.inputs import Stage, TimeStepping
+from pilegroup.solver.inputs import SolverStage, StepControl
 
 if TYPE_CHECKING:
     from pilegroup.solver.newton import StepInfo
@@ -85,7 +85,7 @@ class AdaptiveStepper:
         log: run log to append to.
     """
 
-    def __init__(self, ts: TimeStepping, log: RunLog | None = None) -> None:
+    def __init__(self, ts: StepControl, log: RunLog | None = None) -> None:
         self.ts = ts
         self.dt = ts.dt0
         self.log = log or RunLog()
@@ -185,7 +185,7 @@ class AdaptiveStepper:
             self.easy = 0
 
 
-def first_dt(stages: Sequence[Stage], ts: TimeStepping) -> float:
+def first_dt(stages: Sequence[SolverStage], ts: StepControl) -> float:
     """Size (day) of the first time step of ``stages``; 0 for an instantaneous load or none."""
     for st in stages:
         if st.kind == "geostatic":
@@ -224,8 +224,8 @@ Boundary = Callable[["BiotProblem", RunState, bool], None]
 
 def run_stages(
     problem: BiotProblem,
-    stages: Sequence[Stage],
-    ts: TimeStepping,
+    stages: Sequence[SolverStage],
+    ts: StepControl,
     on_milestone: Callback | None = None,
     geostatic_tol: float = 1e-6,
     on_step: Callback | None = None,
@@ -270,7 +270,7 @@ def run_stages(
 class _Run:
     """The stage loop of :func:`run_stages`, resumable from a :class:`RunState`."""
 
-    def __init__(self, problem: BiotProblem, stages: Sequence[Stage], ts: TimeStepping,
+    def __init__(self, problem: BiotProblem, stages: Sequence[SolverStage], ts: StepControl,
                  state: RunState, boundary: Boundary | None) -> None:
         self.problem, self.stages, self.ts = problem, stages, ts
         self.state, self.boundary = state, boundary
@@ -314,7 +314,7 @@ class _Run:
         log.wall_s = time.perf_counter() - t_wall
         return log
 
-    def _geostatic(self, i: int, st: Stage, t: float, lam: float, tol: float,
+    def _geostatic(self, i: int, st: SolverStage, t: float, lam: float, tol: float,
                    on_milestone: Callback) -> None:
         """K0 stress, one equilibrium check step, displacements reset (see the module doc)."""
         problem, log = self.problem, self.state.log
@@ -339,7 +339,7 @@ class _Run:
         on_milestone(problem, t, st.name)
         self.at_boundary(t, lam, True, done=True)
 
-    def _instantaneous(self, st: Stage, t: float, lam: float, lam1: float,
+    def _instantaneous(self, st: SolverStage, t: float, lam: float, lam1: float,
                        on_milestone: Callback) -> None:
         """One undrained step to the stage's load factor."""
         problem = self.problem
@@ -357,7 +357,7 @@ class _Run:
         on_milestone(problem, t, st.name)
         self.at_boundary(t, lam1, True, done=True)
 
-    def _advance(self, st: Stage, span: tuple[float, float, float, float], t_from: float,
+    def _advance(self, st: SolverStage, span: tuple[float, float, float, float], t_from: float,
                  on_milestone: Callback, on_step: Callback | None) -> None:
         """A ramped load or a consolidation stage, from ``t_from`` to its end."""
         t0, t1, lam0, lam1 = span

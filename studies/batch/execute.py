@@ -1,13 +1,13 @@
 """``pilegroup batch``: the cases of a plan run on groups of MPI ranks, from a shared queue.
 
-The world communicator is split into ``size / ranks_per_case`` groups of consecutive ranks.
-Each group runs one case at a time on its own communicator (:func:`run_scenario` with
-``comm=group``) and then takes the next. The queue is the cases in the order of
-:func:`~pilegroup.studies.batch.plan.queue_order` (largest estimated mesh first); a group's first
-rank claims the next case by creating its numbered file in ``<out>/.queue/<token>/`` with
-``O_CREAT | O_EXCL`` (exactly one creator succeeds, on a local or an NFS file system), so no
-rank waits for another's MPI progress and nothing can deadlock: a group that finds every number
-taken is done. Ranks that are done wait for the others without spinning (``Ibarrier`` polled).
+The world communicator is split into ``size / ranks_per_case`` groups of consecutive ranks. Each
+group runs one case at a time on its own communicator (:func:`run_scenario` with ``comm=group``)
+and then takes the next. The queue is the cases in the order of
+:func:`~pilegroup.studies.batch.batch_plan.queue_order` (largest estimated mesh first); a group's
+first rank claims the next case by creating its numbered file in ``<out>/.queue/<token>/`` with
+``O_CREAT | O_EXCL`` (exactly one creator succeeds, on a local or an NFS file system), so no rank
+waits for another's MPI progress and nothing can deadlock: a group that finds every number taken is
+done. Ranks that are done wait for the others without spinning (``Ibarrier`` polled).
 
 Before anything runs, every case's scenario is validated; a case whose folder already holds a
 complete run of the same resolved scenario (:func:`~pilegroup.studies.batch.rows.is_complete`)
@@ -55,7 +55,7 @@ from tqdm.contrib.logging import logging_redirect_tqdm
 
 from pilegroup.errors import PilegroupError, ScenarioError
 from pilegroup.fileio import write_json_atomic
-from pilegroup.studies.batch.plan import Plan, ResolvedCase, queue_order, resolve_cases
+from pilegroup.studies.batch.batch_plan import BatchPlan, ResolvedCase, queue_order, resolve_cases
 from pilegroup.studies.batch.rows import RECORD, case_row, counts, is_complete, write_tables
 from pilegroup.studies.run.interrupt import abort_job
 from pilegroup.studies.run.job import run_scenario
@@ -320,7 +320,7 @@ def _prepare(cases: tuple[ResolvedCase, ...], out: Path, comm: MPI.Comm
     return comm.bcast(data, root=0)
 
 
-def run_batch(plan: Plan, out: str | Path, ranks_per_case: int = 1,
+def run_batch(plan: BatchPlan, out: str | Path, ranks_per_case: int = 1,
               comm: MPI.Comm = MPI.COMM_WORLD, progress: bool = True) -> BatchResult:
     """Run every case of ``plan`` not yet complete under ``out``; collective over ``comm``.
 

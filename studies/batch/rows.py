@@ -28,7 +28,7 @@ import numpy as np
 
 from pilegroup.errors import ScenarioError
 from pilegroup.fileio import read_json, write_json_atomic, write_text_atomic
-from pilegroup.studies.batch.plan import ResolvedCase, scenario_digest
+from pilegroup.studies.batch.batch_plan import ResolvedCase, scenario_digest
 from pilegroup.studies.results.rundata import layer_label, layer_series, load_run
 
 RECORD = "batch_case.json"

@@ -33,8 +33,8 @@ from pilegroup.errors import ScenarioError
 from pilegroup.geometry.adapter import geometry_spec
 from pilegroup.model import Scenario, load_scenario
 from pilegroup.model.mesh_estimate import estimated_cells
+from pilegroup.studies.batch.batch_plan import BatchCase, BatchPlan
 from pilegroup.studies.batch.execute import run_batch
-from pilegroup.studies.batch.plan import Plan, PlanCase
 from pilegroup.studies.campaigns.mesh_report import write_mesh_report
 from pilegroup.studies.report.paper_values import PAPER_HOURS
 
@@ -139,7 +139,7 @@ def study_cases(sc: Scenario, checks: Sequence[SizeCheck], penalty_factor: float
 
 
 def study_plan(source: str, sets: Mapping[str, Any], sc: Scenario,
-               cases: Sequence[StudyCase]) -> Plan:
+               cases: Sequence[StudyCase]) -> BatchPlan:
     """The batch plan of ``cases`` (``sets`` first, then the size and the penalty)."""
     factor = sc.interface.normal_stiffness_factor
     out = []
@@ -147,8 +147,8 @@ def study_plan(source: str, sets: Mapping[str, Any], sc: Scenario,
         over = [*sets.items(), (SIZE_KEY, c.h)]
         if c.penalty != 1.0:
             over.append((PENALTY_KEY, factor * c.penalty))
-        out.append(PlanCase(c.name, tuple(over)))
-    return Plan(source, tuple(out), f"mesh_study_{sc.name}")
+        out.append(BatchCase(c.name, tuple(over)))
+    return BatchPlan(source, tuple(out), f"mesh_study_{sc.name}")
 
 
 def run_mesh_study(source: str, sets: Mapping[str, Any], sizes: Sequence[float], out: Path,

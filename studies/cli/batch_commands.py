@@ -56,8 +56,8 @@ def _print_rows(rows: list[dict[str, Any]]) -> None:
 
 
 def _cmd_batch(args: argparse.Namespace) -> int:
+    from pilegroup.studies.batch.batch_plan import load_plan
     from pilegroup.studies.batch.execute import run_batch
-    from pilegroup.studies.batch.plan import load_plan
 
     try:
         plan = load_plan(args.plan)

@@ -41,10 +41,10 @@ from pilegroup.solver import (
     RunLog,
     SoilMaterial,
     SolverOptions,
-    Stage,
+    SolverStage,
+    StepControl,
     SummaryWriter,
     SurfaceLoad,
-    TimeStepping,
     XDMFSeries,
     run_stages,
     run_summary,
@@ -201,25 +201,25 @@ def estimate_dofs(md: MeshData, element: str) -> int:
     return int(nv * (3 * (8 if element == "Q2Q1" else 1) + 1))
 
 
-def solver_stages(sc: Scenario) -> list[Stage]:
+def solver_stages(sc: Scenario) -> list[SolverStage]:
     """The scenario's stages as solver stages (load factor 1 = the full cap load)."""
     out = []
     total = sc.total_cap_load()
     for st, t0, t1 in sc.stage_times():
         if st.kind == "geostatic":
-            out.append(Stage(st.name, "geostatic"))
+            out.append(SolverStage(st.name, "geostatic"))
         elif st.kind == "load":
             lf = st.cap_load_kN / total if total > 0 else 0.0  # type: ignore[operator]
-            out.append(Stage(st.name, "load", duration=t1 - t0, load_factor=lf))
+            out.append(SolverStage(st.name, "load", duration=t1 - t0, load_factor=lf))
         else:
-            out.append(Stage(st.name, "consolidation", duration=t1 - t0))
+            out.append(SolverStage(st.name, "consolidation", duration=t1 - t0))
     return out
 
 
-def time_stepping(sc: Scenario) -> TimeStepping:
+def time_stepping(sc: Scenario) -> StepControl:
     """The solver's adaptive stepping rules from ``numerics.time`` and ``time.output_days``."""
     t = sc.numerics.time
-    return TimeStepping(dt0=t.dt_initial_day, dt_min=t.dt_min_day, dt_max=t.dt_max_day,
+    return StepControl(dt0=t.dt_initial_day, dt_min=t.dt_min_day, dt_max=t.dt_max_day,
                         grow=t.grow_factor, cut=t.cut_factor, easy_newton=t.easy_newton,
                         milestones=tuple(x for x in sc.time.output_days if x > 0))
 

@@ -31,7 +31,7 @@ from pilegroup.solver import (
     PressureBC,
     SoilMaterial,
     SolverOptions,
-    Stage,
+    SolverStage,
 )
 
 if TYPE_CHECKING:  # annotations only
@@ -126,9 +126,10 @@ def soil_problem(md: MeshData, soil: SoilMaterial, disc: Discretisation,
                        self_weight=False)
 
 
-def load_then_consolidate(t_end: float) -> list[Stage]:
+def load_then_consolidate(t_end: float) -> list[SolverStage]:
     """An instantaneous (undrained) load step, then consolidation under it to ``t_end`` days."""
-    return [Stage("load", "load", 0.0, 1.0), Stage("consolidation", "consolidation", t_end)]
+    return [SolverStage("load", "load", 0.0, 1.0),
+            SolverStage("consolidation", "consolidation", t_end)]
 
 
 def single_pile_mesh(comm: MPI.Comm, layers: tuple[tuple[str, float | None], ...], length: float,

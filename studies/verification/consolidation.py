@@ -29,8 +29,8 @@ from pilegroup.solver import (
     PressureBC,
     RigidPlate,
     SolverOptions,
+    StepControl,
     SurfaceLoad,
-    TimeStepping,
     run_stages,
 )
 from pilegroup.studies.verification.common import (
@@ -196,7 +196,7 @@ def terzaghi(size: str = "fast", pair: str = "Q2Q1", nz: int | None = None,
                           SolverOptions(preset=preset, prefix=f"terz_{pair}_"))
     times = [T * col.H**2 / col.cv for T in TERZAGHI_T_V]
     t_end = times[-1]
-    ts = TimeStepping(dt0=1e-4 * t_end, dt_min=1e-12, dt_max=dT_max * t_end,
+    ts = StepControl(dt0=1e-4 * t_end, dt_min=1e-12, dt_max=dT_max * t_end,
                       grow=10.0 ** (1.0 / spd), hold=1, milestones=tuple(times[:-1]))
     rows: list[dict[str, float]] = []
     log = run_stages(problem, load_then_consolidate(t_end), ts,
@@ -317,7 +317,7 @@ def mandel(size: str = "fast", pair: str = "Q2Q1", n: int | None = None,
     cst = slab.constants()
     times = [T * slab.a**2 / cst["c"] for T in MANDEL_T_STAR]
     t_end = times[-1]
-    ts = TimeStepping(dt0=1e-5 * t_end, dt_min=1e-14, dt_max=dT_max * t_end,
+    ts = StepControl(dt0=1e-5 * t_end, dt_min=1e-14, dt_max=dT_max * t_end,
                       grow=10.0 ** (1.0 / spd), milestones=tuple(times[:-1]))
     rows: list[dict[str, float]] = []
     log = run_stages(problem, load_then_consolidate(t_end), ts,

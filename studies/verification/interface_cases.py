@@ -36,9 +36,9 @@ from pilegroup.solver import (
     InterfaceCoupling,
     RigidPlate,
     SoilMaterial,
-    Stage,
+    SolverStage,
+    StepControl,
     SurfaceLoad,
-    TimeStepping,
     run_stages,
 )
 from pilegroup.solver.probes import SettlementProbe, facet_area
@@ -198,9 +198,9 @@ def shaft_capacity(size: str = "fast", pair: str = "Q1Q1", preset: str = "direct
         f"shaftcap_{pair}_", InterfaceCoupling((shaft, base), quadrature=quadrature),
         box_bcs((0, 1, 2), DisplacementBC(groups.head(1), 2, -test.push)))
     rec = _ShaftRecorder(test, comm)
-    ts = TimeStepping(dt0=0.05, dt_max=0.05, dt_min=1e-4, milestones=TENTHS)
-    log = run_stages(pb, [Stage("geostatic", "geostatic"), Stage("push", "load", 1.0, 1.0)], ts,
-                     on_milestone=rec, geostatic_tol=1e-4)
+    ts = StepControl(dt0=0.05, dt_max=0.05, dt_min=1e-4, milestones=TENTHS)
+    stages = [SolverStage("geostatic", "geostatic"), SolverStage("push", "load", 1.0, 1.0)]
+    log = run_stages(pb, stages, ts, on_milestone=rec, geostatic_tol=1e-4)
     d = _shaft_details(pb, shaft, rec, comm)
     err = max(d["err_plateau"], d["err_insitu"])
     tol = 0.02
@@ -371,10 +371,10 @@ def interface_patch(size: str = "fast", pair: str = "Q1Q1", preset: str = "direc
                             variant="default")
     pb = _patch_problem(md, law, preset, quadrature)
     rec = _PatchRecorder(pb.interface, facet_area(md, [groups.base(1)], interior=True), comm)
-    ts = TimeStepping(dt0=0.05, dt_max=0.5, dt_min=1e-5, grow=1.5,
+    ts = StepControl(dt0=0.05, dt_max=0.5, dt_min=1e-5, grow=1.5,
                       milestones=(0.25, 0.5, 0.75, 2.0, 3.0, 4.0))
-    log = run_stages(pb, [Stage("shear", "load", 1.0, 1.0),
-                          Stage("creep", "consolidation", 4.0)], ts, on_step=rec)
+    log = run_stages(pb, [SolverStage("shear", "load", 1.0, 1.0),
+                          SolverStage("creep", "consolidation", 4.0)], ts, on_step=rec)
     Rf = _pointwise_reference(law, rec.steps)
     errs = _patch_errors(np.array(rec.fe), Rf)
     err = max(errs.values())
@@ -409,8 +409,8 @@ def _tied_run(md: MeshData, mats: dict[str, SoilMaterial | ElasticSolid],
     pb = structure_problem(md, mats, pair, preset, prefix, coupling, box_bcs((0, 1, 2)),
                            loads=[SurfaceLoad(groups.head(1), q)])
     probe = SettlementProbe(pb, [groups.head(1)])
-    log = run_stages(pb, [Stage("geostatic", "geostatic"), Stage("load", "load", 0.0, 1.0)],
-                     TimeStepping(), geostatic_tol=1e-4)
+    stages = [SolverStage("geostatic", "geostatic"), SolverStage("load", "load", 0.0, 1.0)]
+    log = run_stages(pb, stages, StepControl(), geostatic_tol=1e-4)
     det, det_z = _detached_points(pb.interface, comm) if pb.interface is not None else (0, [])
     osc = shaft_profile_oscillation(pb.interface, comm) if pb.interface is not None else {}
     return {"settlement_m": probe(), "dofs": pb.num_dofs, "newton": log.newton_total,

@@ -26,9 +26,9 @@ from pilegroup.solver import (
     DisplacementBC,
     SoilMaterial,
     SolverOptions,
-    Stage,
+    SolverStage,
+    StepControl,
     SurfaceLoad,
-    TimeStepping,
     run_stages,
 )
 from pilegroup.studies.verification.common import (
@@ -110,8 +110,8 @@ def triaxial(size: str = "fast", pair: str = "Q2Q1", n: int | None = None,
         hist.append({"t": t, "axial_strain": 0.02 * t, "reaction_kN": p.reaction(
             groups.GROUND, 2)})
 
-    ts = TimeStepping(dt0=0.05, dt_min=1e-6, dt_max=0.1, grow=1.5, milestones=TENTHS)
-    log = run_stages(pb, [Stage("shear", "load", 1.0, 1.0)], ts, on_milestone=record)
+    ts = StepControl(dt0=0.05, dt_min=1e-6, dt_max=0.1, grow=1.5, milestones=TENTHS)
+    log = run_stages(pb, [SolverStage("shear", "load", 1.0, 1.0)], ts, on_milestone=record)
     N = (1 + math.sin(math.radians(phi))) / (1 - math.sin(math.radians(phi)))
     s1 = sc * N + 2 * c * math.sqrt(N)
     R = hist[-1]["reaction_kN"]
@@ -171,8 +171,8 @@ def strip_footing(pair: str = "Q2Q1", n: int = 10, comm: MPI.Comm | None = None
                       box_bcs((2,), DisplacementBC("footing", 2, value=-0.05)),
                       pressure_bcs=DRAINED)
     qc: list[float] = []
-    ts = TimeStepping(dt0=0.05, dt_max=0.05, dt_min=1e-5, milestones=TENTHS)
-    log = run_stages(pb, [Stage("push", "load", 1.0, 1.0)], ts,
+    ts = StepControl(dt0=0.05, dt_max=0.05, dt_min=1e-5, milestones=TENTHS)
+    log = run_stages(pb, [SolverStage("push", "load", 1.0, 1.0)], ts,
                      on_milestone=lambda p, t, s: qc.append(-p.reaction("footing", 2)
                                                             / (thick * b * c)))
     return {"pair": pair, "n": n, "dofs": pb.num_dofs, "q_over_c": qc,

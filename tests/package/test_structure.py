@@ -107,3 +107,22 @@ def test_module_and_function_sizes(module):
             if isinstance(n, ast.FunctionDef | ast.AsyncFunctionDef)
             and n.end_lineno - n.lineno + 1 > MAX_FUNCTION]
     assert not long, f"{path}: {long}"
+
+
+def test_module_names_are_unique():
+    """One name per concept: no two modules share a file name (``__init__``/``__main__`` aside)."""
+    seen: dict[str, list[str]] = {}
+    for m, p in _modules().items():
+        if p.stem not in ("__init__", "__main__"):
+            seen.setdefault(p.stem, []).append(m)
+    assert not {k: v for k, v in seen.items() if len(v) > 1}
+
+
+def test_class_names_are_unique():
+    """One name per concept: a class name is defined in one module of the package only."""
+    seen: dict[str, list[str]] = {}
+    for m, p in _modules().items():
+        for node in ast.parse(p.read_text()).body:
+            if isinstance(node, ast.ClassDef):
+                seen.setdefault(node.name, []).append(m)
+    assert not {k: v for k, v in seen.items() if len(v) > 1}

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pilegroup.solver import SolverError, StepFailure, StepInfo, TimeStepping
+from pilegroup.solver import SolverError, StepControl, StepFailure, StepInfo
 from pilegroup.solver.stepping import AdaptiveStepper
 from pilegroup.studies import verification as ver
 
@@ -150,7 +150,7 @@ class FakeProblem:
 def test_stepper_cuts_back_grows_and_hits_milestones():
     pb = FakeProblem(dt_fail=0.3)
     hits = []
-    st = AdaptiveStepper(TimeStepping(dt0=1.0, dt_min=1e-3, grow=2.0, cut=0.5,
+    st = AdaptiveStepper(StepControl(dt0=1.0, dt_min=1e-3, grow=2.0, cut=0.5,
                                       milestones=(0.7, 2.0)))
     t = st.advance(pb, 0.0, 3.0, lambda t: 1.0, on_milestone=lambda p, t, s: hits.append(t))
     assert t == 3.0 and hits == [0.7, 2.0, 3.0]
@@ -160,7 +160,7 @@ def test_stepper_cuts_back_grows_and_hits_milestones():
 
 
 def test_stepper_raises_below_dt_min():
-    st = AdaptiveStepper(TimeStepping(dt0=1.0, dt_min=0.1, cut=0.5))
+    st = AdaptiveStepper(StepControl(dt0=1.0, dt_min=0.1, cut=0.5))
     with pytest.raises(StepFailure):
         st.advance(FakeProblem(dt_fail=0.01), 0.0, 1.0, lambda t: 1.0)
 
@@ -176,7 +176,7 @@ def test_geostatic_stage_equilibrium_and_reset():
         DisplacementBC,
         PressureBC,
         SoilMaterial,
-        Stage,
+        SolverStage,
         run_stages,
     )
 
@@ -189,7 +189,7 @@ def test_geostatic_stage_equilibrium_and_reset():
            DisplacementBC("side_ymin", 1), DisplacementBC("side_ymax", 1),
            DisplacementBC("bottom", 2)]
     pb = BiotProblem(md, mats, displacement_bcs=bcs, pressure_bcs=[PressureBC("ground_surface")])
-    log = run_stages(pb, [Stage("geo", "geostatic")], TimeStepping())
+    log = run_stages(pb, [SolverStage("geo", "geostatic")], StepControl())
     assert log.geostatic_max_u < 1e-9
     assert pb.max_displacement() == 0.0
     for g in pb.bodies[0].qp.groups:
@@ -204,7 +204,7 @@ def test_geostatic_stage_equilibrium_and_reset():
     pb2 = BiotProblem(md, mats, displacement_bcs=bcs)
     pb2.geostatic_stress = lambda: {g.name: None for g in pb2.bodies[0].qp.groups}
     with pytest.raises(SolverError):
-        run_stages(pb2, [Stage("geo", "geostatic")], TimeStepping(), geostatic_tol=1e-6)
+        run_stages(pb2, [SolverStage("geo", "geostatic")], StepControl(), geostatic_tol=1e-6)
 
 
 def _json_lines(out):
@@ -272,7 +272,7 @@ def test_nan_from_law_is_cut_back_and_rolled_back():
         DisplacementBC,
         PressureBC,
         SoilMaterial,
-        Stage,
+        SolverStage,
         SurfaceLoad,
         run_stages,
     )
@@ -286,8 +286,8 @@ def test_nan_from_law_is_cut_back_and_rolled_back():
                               DisplacementBC("bottom", 2)],
             pressure_bcs=[PressureBC(None)], loads=[SurfaceLoad("ground_surface", 100.0)],
             self_weight=False)
-        log = run_stages(pb, [Stage("ramp", "load", 1.0, 1.0)],
-                         TimeStepping(dt0=dt0, dt_min=1e-4, grow=1.0, cut=0.5))
+        log = run_stages(pb, [SolverStage("ramp", "load", 1.0, 1.0)],
+                         StepControl(dt0=dt0, dt_min=1e-4, grow=1.0, cut=0.5))
         return pb, log
 
     ref, _ = run(LinearElastic(1e4, 0.3), 1.0)
@@ -316,13 +316,13 @@ def test_strip_footing_q2_plateau_and_q1_locking():
 
 
 def test_geostatic_step_takes_the_next_steps_size():
-    from pilegroup.solver import Stage
+    from pilegroup.solver import SolverStage
     from pilegroup.solver.stepping import first_dt
 
-    ts = TimeStepping(dt0=0.05, dt_max=10.0)
-    geo = Stage("geo", "geostatic")
-    assert first_dt([geo, Stage("load", "load", duration=1.0)][1:], ts) == 0.05
-    assert first_dt([Stage("load", "load", duration=0.01)], ts) == 0.01  # shorter stage
-    assert first_dt([Stage("load", "load", duration=2.0, dt0=0.2)], ts) == 0.2
-    assert first_dt([Stage("now", "load", duration=0.0)], ts) == 0.0  # undrained load next
+    ts = StepControl(dt0=0.05, dt_max=10.0)
+    geo = SolverStage("geo", "geostatic")
+    assert first_dt([geo, SolverStage("load", "load", duration=1.0)][1:], ts) == 0.05
+    assert first_dt([SolverStage("load", "load", duration=0.01)], ts) == 0.01  # shorter stage
+    assert first_dt([SolverStage("load", "load", duration=2.0, dt0=0.2)], ts) == 0.2
+    assert first_dt([SolverStage("now", "load", duration=0.0)], ts) == 0.0  # undrained load next
     assert first_dt([], ts) == 0.0

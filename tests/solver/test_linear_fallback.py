@@ -16,9 +16,9 @@ from pilegroup.solver import (
     SoilMaterial,
     SolverError,
     SolverOptions,
-    Stage,
+    SolverStage,
+    StepControl,
     SurfaceLoad,
-    TimeStepping,
     run_stages,
 )
 
@@ -33,9 +33,9 @@ def _run(preset, overrides=None, stages=None):
                      loads=[SurfaceLoad(groups.GROUND, 50.0)],
                      options=SolverOptions(preset=preset, overrides=overrides or {},
                                            prefix=f"fb_{preset}_"))
-    stages = stages or [Stage("geo", "geostatic"), Stage("load", "load", 0.0, 1.0),
-                        Stage("cons", "consolidation", 2.0)]
-    log = run_stages(pb, stages, TimeStepping(dt0=0.25, dt_min=1e-3))
+    stages = stages or [SolverStage("geo", "geostatic"), SolverStage("load", "load", 0.0, 1.0),
+                        SolverStage("cons", "consolidation", 2.0)]
+    log = run_stages(pb, stages, StepControl(dt0=0.25, dt_min=1e-3))
     return pb, log
 
 
@@ -61,7 +61,7 @@ def test_a_failed_krylov_solve_hands_over_without_cutting_the_step():
     """A ramped load: the step whose Krylov solve fails is tried again at once, at the same
     size, with the fallback (a smaller step does not cure a preconditioner), so the run takes
     the direct solver's steps and gives its answer."""
-    stages = [Stage("geo", "geostatic"), Stage("load", "load", 0.5, 1.0)]
+    stages = [SolverStage("geo", "geostatic"), SolverStage("load", "load", 0.5, 1.0)]
     ref, ref_log = _run("direct", stages=stages)
     pb, log = _run("fieldsplit_gamg", {"ksp_max_it": 1}, stages)
     assert pb.linear_solver.preset == "direct_reuse" and len(pb.linear_solver.fallbacks) == 1

@@ -17,8 +17,8 @@ import pilegroup
 from mpi4py import MPI
 from pilegroup.constitutive.soil import MohrCoulomb
 from pilegroup.geometry.box import build_box
-from pilegroup.solver import (BiotProblem, DisplacementBC, PressureBC, SoilMaterial, Stage,
-                              SummaryWriter, SurfaceLoad, TimeStepping, XDMFSeries, run_stages,
+from pilegroup.solver import (BiotProblem, DisplacementBC, PressureBC, SoilMaterial, SolverStage,
+                              SummaryWriter, SurfaceLoad, StepControl, XDMFSeries, run_stages,
                               run_summary)
 
 md = build_box(MPI.COMM_WORLD, (0, 1), (0, 1), np.linspace(-2, 0, 5), 2, 2, layer_tops=[-1.0])
@@ -28,13 +28,13 @@ bcs = [DisplacementBC("side_xmin", 0), DisplacementBC("side_xmax", 0),
        DisplacementBC("side_ymin", 1), DisplacementBC("side_ymax", 1), DisplacementBC("bottom", 2)]
 pb = BiotProblem(md, mats, displacement_bcs=bcs, pressure_bcs=[PressureBC("ground_surface")],
                  loads=[SurfaceLoad("ground_surface", 80.0)])
-stages = [Stage("geo", "geostatic"), Stage("load", "load", 1.0, 1.0, dt0=0.25),
-          Stage("cons", "consolidation", 10.0)]
+stages = [SolverStage("geo", "geostatic"), SolverStage("load", "load", 1.0, 1.0, dt0=0.25),
+          SolverStage("cons", "consolidation", 10.0)]
 out = Path(sys.argv[1])
 series = XDMFSeries(pb, out / "results.xdmf")
 writer = SummaryWriter(out / "summary.json", pb.comm,
                        lambda done: {"complete": done, "output_times_day": series.times})
-log = run_stages(pb, stages, TimeStepping(dt0=0.5, milestones=(5.0,)), exports=[series, writer])
+log = run_stages(pb, stages, StepControl(dt0=0.5, milestones=(5.0,)), exports=[series, writer])
 writer.finish(run_summary(pb, log, {"complete": True, "output_times_day": series.times}))
 '''
 

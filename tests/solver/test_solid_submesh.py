@@ -19,9 +19,9 @@ from pilegroup.solver import (
     ElasticSolid,
     PressureBC,
     SoilMaterial,
-    Stage,
+    SolverStage,
+    StepControl,
     SurfaceLoad,
-    TimeStepping,
     run_stages,
 )
 from pilegroup.studies.verification import eval_points as _eval_points
@@ -51,8 +51,9 @@ def test_soil_over_impermeable_solid(pair):
     cv = (k / GAMMA_W) / (soil.storage + 1 / m)
     T = 0.2
     t_end = T * Hs**2 / cv
-    ts = TimeStepping(dt0=1e-4 * t_end, dt_min=1e-12, dt_max=2e-3 * t_end, grow=10 ** (1 / 16))
-    run_stages(pb, [Stage("load", "load", 0.0, 1.0), Stage("cons", "consolidation", t_end)], ts)
+    ts = StepControl(dt0=1e-4 * t_end, dt_min=1e-12, dt_max=2e-3 * t_end, grow=10 ** (1 / 16))
+    stages = [SolverStage("load", "load", 0.0, 1.0), SolverStage("cons", "consolidation", t_end)]
+    run_stages(pb, stages, ts)
     z = np.linspace(-Hs, 0.0, 101)
     ph = _eval_points(pb.p, np.column_stack([np.full_like(z, 0.5), np.full_like(z, 0.5), z]))
     pe = terzaghi_series(-z, Hs, T, p0)

@@ -7,7 +7,7 @@ import pytest
 
 from pilegroup.errors import ScenarioError
 from pilegroup.model import load_scenario
-from pilegroup.studies.batch.plan import (
+from pilegroup.studies.batch.batch_plan import (
     load_plan,
     queue_order,
     resolve_cases,

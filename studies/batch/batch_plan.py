@@ -48,7 +48,7 @@ PLAN_KEYS = {"batch": ("scenario", "set"), "case": ("name", "set")}
 
 
 @dataclass(frozen=True)
-class PlanCase:
+class BatchCase:
     """One case of a plan: its name (run folder) and its overrides, in the order applied."""
 
     name: str
@@ -60,11 +60,11 @@ class PlanCase:
 
 
 @dataclass(frozen=True)
-class Plan:
+class BatchPlan:
     """A base scenario (bundled name or file path) and its cases."""
 
     scenario: str
-    cases: tuple[PlanCase, ...]
+    cases: tuple[BatchCase, ...]
     name: str = "batch"
 
 
@@ -72,7 +72,7 @@ class Plan:
 class ResolvedCase:
     """A case with its validated scenario, the digest of it and its estimated cell count."""
 
-    case: PlanCase
+    case: BatchCase
     scenario: Scenario
     digest: str
     cost: float
@@ -111,7 +111,7 @@ def _value_text(value: Any) -> str:
     return re.sub(r"[^A-Za-z0-9._+-]", "_", text)
 
 
-def sweep_cases(sweep: dict[str, Any]) -> list[PlanCase]:
+def sweep_cases(sweep: dict[str, Any]) -> list[BatchCase]:
     """The cartesian product of a ``[sweep]`` table (key -> list of values), named by value."""
     for key, values in sweep.items():
         if not isinstance(values, list) or not values:
@@ -125,13 +125,13 @@ def sweep_cases(sweep: dict[str, Any]) -> list[PlanCase]:
     out = []
     for combo in itertools.product(*(sweep[k] for k in keys)):
         name = ",".join(f"{lab}={_value_text(v)}" for lab, v in zip(labels, combo, strict=True))
-        out.append(PlanCase(name, tuple(zip(keys, combo, strict=True))))
+        out.append(BatchCase(name, tuple(zip(keys, combo, strict=True))))
     return out
 
 
 def plan_from_dict(data: dict[str, Any], base_dir: Path | None = None,
-                   name: str = "batch") -> Plan:
-    """A :class:`Plan` from a parsed plan file; ``base_dir``: the folder of relative paths."""
+                   name: str = "batch") -> BatchPlan:
+    """A :class:`BatchPlan` from a parsed plan file; ``base_dir``: the folder of relative paths."""
     _check_keys(data, "plan", ("batch", "sweep", "case"))
     head = _table(data.get("batch"), "batch")
     _check_keys(head, "batch", PLAN_KEYS["batch"])
@@ -156,7 +156,7 @@ def plan_from_dict(data: dict[str, Any], base_dir: Path | None = None,
         entry = _table(entry, f"case[{i}]")
         _check_keys(entry, f"case[{i}]", PLAN_KEYS["case"])
         cname = _check_name(entry.get("name"), f"case[{i}].name")
-        cases.append(PlanCase(cname, tuple(_table(entry.get("set", {}),
+        cases.append(BatchCase(cname, tuple(_table(entry.get("set", {}),
                                                   f"case[{i}].set").items())))
     cases += sweep_cases(_table(data.get("sweep", {}), "sweep"))
     if not cases:
@@ -167,11 +167,11 @@ def plan_from_dict(data: dict[str, Any], base_dir: Path | None = None,
         if c.name in seen:
             raise ScenarioError("case name", c.name, "must be unique within the plan")
         seen.add(c.name)
-    return Plan(source, tuple(PlanCase(c.name, tuple(common) + c.overrides) for c in cases),
+    return BatchPlan(source, tuple(BatchCase(c.name, tuple(common) + c.overrides) for c in cases),
                 name)
 
 
-def load_plan(path: str | Path) -> Plan:
+def load_plan(path: str | Path) -> BatchPlan:
     """Read and check a plan file (not yet its cases' scenarios: :func:`resolve_cases`)."""
     path = Path(path)
     if not path.is_file():
@@ -194,7 +194,7 @@ def scenario_digest(resolved: Scenario | dict[str, Any]) -> str:
     return hashlib.sha256(text.encode("utf-8")).hexdigest()
 
 
-def resolve_case(plan: Plan, case: PlanCase) -> ResolvedCase:
+def resolve_case(plan: BatchPlan, case: BatchCase) -> ResolvedCase:
     """The validated scenario of ``case``; a problem names the case and the key."""
     try:
         sc = load_scenario(plan.scenario, case.override_dict())
@@ -204,7 +204,7 @@ def resolve_case(plan: Plan, case: PlanCase) -> ResolvedCase:
     return ResolvedCase(case, sc, scenario_digest(sc), estimated_cells(sc))
 
 
-def resolve_cases(plan: Plan) -> tuple[ResolvedCase, ...]:
+def resolve_cases(plan: BatchPlan) -> tuple[ResolvedCase, ...]:
     """Every case validated (the first problem is raised), in the plan's order."""
     return tuple(resolve_case(plan, c) for c in plan.cases)
 
@@ -214,5 +214,5 @@ def queue_order(cases: tuple[ResolvedCase, ...]) -> list[int]:
     return sorted(range(len(cases)), key=lambda i: (-cases[i].cost, i))
 
 
-__all__ = ["Plan", "PlanCase", "ResolvedCase", "load_plan", "plan_from_dict", "queue_order",
+__all__ = ["BatchPlan", "BatchCase", "ResolvedCase", "load_plan", "plan_from_dict", "queue_order",
            "resolve_case", "resolve_cases", "scenario_digest", "sweep_cases"]
