@@ -9,7 +9,7 @@ when its pile layout and cap are (:func:`GeometrySpec.symmetry_planes
 
 from __future__ import annotations
 
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 from pilegroup.geometry import spec
 from pilegroup.geometry import symmetry as sym
@@ -69,23 +69,42 @@ def _resolve(sc: Scenario, full: spec.GeometrySpec) -> tuple[sym.Symmetry, str]:
                    f"mirror-symmetric about {sym.describe_planes(sym.PLANES[asked])}")
 
 
-def resolve_symmetry(sc: Scenario) -> tuple[str, str]:
-    """The model part scenario ``sc`` uses, and why in words (for the run summary).
+@dataclass(frozen=True)
+class ResolvedGeometry:
+    """A scenario's geometry, resolved once per run and handed to every layer below.
+
+    ``spec`` is the geometry with the model part ``numerics.symmetry`` resolves to (its
+    ``symmetry``), ``reason`` says why in words (for the run summary), e.g. ``"auto: pile
+    layout, cap, block and load mirror-symmetric about x = 0 and y = 0"``.
+    """
+
+    spec: spec.GeometrySpec
+    reason: str
+
+    @property
+    def symmetry(self) -> str:
+        """The model part: ``none``, ``quarter``, ``half_x`` or ``half_y``."""
+        return self.spec.symmetry
+
+    @property
+    def kept_fraction(self) -> float:
+        """Fraction of the whole model the mesh holds: 1, 1/2 or 1/4."""
+        return 0.5 ** len(self.spec.cut_planes())
+
+
+def resolve_geometry(sc: Scenario, mesh_size: float | None = None) -> ResolvedGeometry:
+    """Scenario ``sc``'s geometry with its symmetry resolved (``mesh_size`` overrides h, m).
 
     ``numerics.symmetry = "auto"`` picks ``quarter`` when the scenario is mirror-symmetric about
     x = 0 and y = 0, ``half_x`` / ``half_y`` when about one of them, else ``none``; an explicit
     value must be one the scenario allows (else :class:`~pilegroup.errors.ScenarioError` naming
-    ``numerics.symmetry``). Returns e.g. ``("quarter", "auto: pile layout, cap, block and load
-    mirror-symmetric about x = 0 and y = 0")``.
+    ``numerics.symmetry``).
     """
-    return _resolve(sc, _full_spec(sc, None))
+    full = _full_spec(sc, mesh_size)
+    mode, reason = _resolve(sc, full)
+    return ResolvedGeometry(full if mode == "none" else replace(full, symmetry=mode), reason)
 
 
 def geometry_spec(sc: Scenario, mesh_size: float | None = None) -> spec.GeometrySpec:
-    """The geometry and mesh sizing of scenario ``sc`` (``mesh_size`` overrides h, m).
-
-    ``symmetry`` is ``numerics.symmetry`` resolved by :func:`resolve_symmetry`.
-    """
-    full = _full_spec(sc, mesh_size)
-    mode, _ = _resolve(sc, full)
-    return full if mode == "none" else replace(full, symmetry=mode)
+    """The geometry of scenario ``sc`` alone (:func:`resolve_geometry`), e.g. to mesh it."""
+    return resolve_geometry(sc, mesh_size).spec

@@ -17,10 +17,7 @@ when kept).
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, Literal
-
-if TYPE_CHECKING:
-    from pilegroup.geometry.spec import CapSpec, PileSpec
+from typing import Literal, Protocol
 
 __all__ = ["MODES", "PLANES", "TOL", "Symmetry", "asymmetry", "describe_planes", "find_pile",
            "is_kept", "meshed_fraction", "mode_of", "mirror_map"]
@@ -35,6 +32,34 @@ PLANES: dict[str, tuple[str, ...]] = {"none": (), "half_x": ("x",), "half_y": ("
 TOL = 1e-9
 
 
+class PlanPile(Protocol):
+    """A pile as the symmetry checks see it (``geometry.spec.PileSpec`` follows it); m."""
+
+    @property
+    def x(self) -> float: ...  # noqa: D102
+    @property
+    def y(self) -> float: ...  # noqa: D102
+    @property
+    def diameter(self) -> float: ...  # noqa: D102
+    @property
+    def length_in_soil(self) -> float: ...  # noqa: D102
+    @property
+    def embedment(self) -> float: ...  # noqa: D102
+
+
+class PlanRectangle(Protocol):
+    """A rectangle in plan (``geometry.spec.CapSpec`` follows it); m."""
+
+    @property
+    def x_min(self) -> float: ...  # noqa: D102
+    @property
+    def x_max(self) -> float: ...  # noqa: D102
+    @property
+    def y_min(self) -> float: ...  # noqa: D102
+    @property
+    def y_max(self) -> float: ...  # noqa: D102
+
+
 def mode_of(planes: Sequence[str]) -> Symmetry:
     """The reduction that cuts at exactly ``planes`` (a subset of ``("x", "y")``)."""
     wanted = set(planes)
@@ -46,11 +71,11 @@ def describe_planes(planes: Sequence[str]) -> str:
     return " and ".join(f"{a} = 0" for a in planes)
 
 
-def _coord(p: PileSpec, axis: str) -> float:
+def _coord(p: PlanPile, axis: str) -> float:
     return p.x if axis == "x" else p.y
 
 
-def find_pile(piles: Sequence[PileSpec], x: float, y: float) -> int | None:
+def find_pile(piles: Sequence[PlanPile], x: float, y: float) -> int | None:
     """Number (1-based) of the pile centred at (x, y) m to :data:`TOL`, else ``None``."""
     for i, p in enumerate(piles, start=1):
         if abs(p.x - x) <= TOL and abs(p.y - y) <= TOL:
@@ -58,7 +83,7 @@ def find_pile(piles: Sequence[PileSpec], x: float, y: float) -> int | None:
     return None
 
 
-def asymmetry(piles: Sequence[PileSpec], cap: CapSpec | None, axis: str) -> str | None:
+def asymmetry(piles: Sequence[PlanPile], cap: PlanRectangle | None, axis: str) -> str | None:
     """Why the geometry is not mirror-symmetric about the plane ``axis`` = 0; ``None`` if it is."""
     if cap is not None:
         lo, hi = (cap.x_min, cap.x_max) if axis == "x" else (cap.y_min, cap.y_max)
@@ -78,19 +103,19 @@ def asymmetry(piles: Sequence[PileSpec], cap: CapSpec | None, axis: str) -> str 
     return None
 
 
-def is_kept(p: PileSpec, planes: Sequence[str]) -> bool:
+def is_kept(p: PlanPile, planes: Sequence[str]) -> bool:
     """Whether pile ``p``'s centre lies in the part a model cut at ``planes`` keeps."""
     return all(_coord(p, a) >= -TOL for a in planes)
 
 
-def meshed_fraction(p: PileSpec, planes: Sequence[str]) -> float:
+def meshed_fraction(p: PlanPile, planes: Sequence[str]) -> float:
     """Fraction of pile ``p`` in a model cut at ``planes``: 1, 1/2, 1/4, or 0 if not kept."""
     if not is_kept(p, planes):
         return 0.0
     return 0.5 ** sum(1 for a in planes if abs(_coord(p, a)) <= TOL)
 
 
-def mirror_map(piles: Sequence[PileSpec], planes: Sequence[str]) -> dict[int, int]:
+def mirror_map(piles: Sequence[PlanPile], planes: Sequence[str]) -> dict[int, int]:
     """Every pile number -> the number of its mirror image among the kept piles.
 
     The piles must be symmetric about ``planes`` (:func:`asymmetry`); kept piles map to

@@ -230,7 +230,7 @@ class Numerics:
     ``symmetry``: which part of the block is modelled. ``none``: all of it; ``half_x``: x >= 0
     (mirror plane x = 0); ``half_y``: y >= 0; ``quarter``: both; ``auto`` (default): the
     smallest part the scenario's mirror symmetry allows
-    (:func:`pilegroup.geometry.adapter.resolve_symmetry`). A plane must be one the pile layout
+    (:func:`pilegroup.geometry.adapter.resolve_geometry`). A plane must be one the pile layout
     and the cap are mirror-symmetric about (the block is centred by construction, the loads are
     uniform on the cap top or the pile heads).
     """

@@ -20,10 +20,29 @@ checks the bound on meshes); a symmetry-reduced model has a half or a quarter of
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
+from typing import Protocol
 
-if TYPE_CHECKING:  # the scenario imports this module
-    from pilegroup.model.scenario import Scenario
+from pilegroup.model.analysis import Numerics
+from pilegroup.model.site import Cap, Layer, Piles, Site
+
+
+class EstimatedScenario(Protocol):
+    """What the estimate reads of a scenario.
+
+    :class:`pilegroup.model.scenario.Scenario` follows it; the scenario checks its estimate when
+    it is built, so this module cannot import it.
+    """
+
+    @property
+    def site(self) -> Site: ...  # noqa: D102
+    @property
+    def layers(self) -> tuple[Layer, ...]: ...  # noqa: D102
+    @property
+    def piles(self) -> Piles: ...  # noqa: D102
+    @property
+    def cap(self) -> Cap | None: ...  # noqa: D102
+    @property
+    def numerics(self) -> Numerics: ...  # noqa: D102
 
 #: Largest estimated cell count accepted: ~50 GB of memory for a Q1-Q1 Biot system with a
 #: direct solver, far beyond the 2-core machines the tool targets.
@@ -42,7 +61,7 @@ def graded_count(length: float, start: float, cap: float, growth: float) -> floa
     return math.log(cap / start) / a + (length - reach) / cap
 
 
-def plan_quads(sc: Scenario) -> float:
+def plan_quads(sc: EstimatedScenario) -> float:
     """Estimated plan quads of the whole block (no symmetry reduction)."""
     m = sc.numerics.mesh
     d = sc.piles.diameter_m
@@ -54,7 +73,7 @@ def plan_quads(sc: Scenario) -> float:
     return sc.piles.count * per_pile + sc.site.size_x_m * sc.site.size_y_m / h_far ** 2
 
 
-def element_layers(sc: Scenario) -> float:
+def element_layers(sc: EstimatedScenario) -> float:
     """Estimated element layers of the extrusion (soil and cap)."""
     m = sc.numerics.mesh
     toe, depth = sc.piles.length_in_soil_m, sc.site.depth_m
@@ -68,7 +87,7 @@ def element_layers(sc: Scenario) -> float:
     return n + slabs * (m.min_layer_divisions + 1)
 
 
-def estimated_cells(sc: Scenario) -> float:
+def estimated_cells(sc: EstimatedScenario) -> float:
     """Conservative estimate of the mesh's hexahedra (see the module docstring)."""
     return SAFETY * plan_quads(sc) * element_layers(sc)
 

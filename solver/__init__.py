@@ -36,9 +36,10 @@ from pilegroup.solver.inputs import (
 )
 from pilegroup.solver.layout import eps_mandel
 from pilegroup.solver.linsolve import PRESETS, Preset, merged_options
-from pilegroup.solver.newton import StepInfo
 from pilegroup.solver.problem import BiotProblem
-from pilegroup.solver.stepping import AdaptiveStepper, RunLog, RunState, StepRecord, run_stages
+from pilegroup.solver.runlog import RunLog, StepRecord
+from pilegroup.solver.step_protocol import StepInfo
+from pilegroup.solver.stepping import AdaptiveStepper, RunState, run_stages
 
 __all__ = [
     "GAMMA_W",

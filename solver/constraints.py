@@ -8,11 +8,9 @@ one rigid plate whose resultant is held at a given force by bordering the Newton
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import TYPE_CHECKING
 
 import numpy as np
 from dolfinx import default_scalar_type, fem
-from dolfinx.fem import petsc as fpetsc
 from mpi4py import MPI
 from petsc4py import PETSc
 
@@ -20,9 +18,7 @@ from pilegroup.errors import SolverInputError
 from pilegroup.solver.inputs import DisplacementBC, PressureBC, RigidPlate
 from pilegroup.solver.interface import NodalInterface
 from pilegroup.solver.layout import BlockLayout
-
-if TYPE_CHECKING:
-    from pilegroup.solver.problem import BiotProblem
+from pilegroup.solver.step_protocol import StepProblem
 
 
 class Constraints:
@@ -49,16 +45,16 @@ class Constraints:
             c = fem.Constant(mesh, default_scalar_type(0.0))
             self._u_consts.append((bc, c))
             for b in layout.bodies_of_facet(bc.facet):  # all bodies the group touches
-                self._add(layout.facet_dofs(b, bc.facet, bc.component), b.V.sub(bc.component),
+                self.add(layout.facet_dofs(b, bc.facet, bc.component), b.V.sub(bc.component),
                           c, b.u)
         for pbc in pressure_bcs:
-            bc, bc0 = self._add(layout.pressure_dofs(pbc.facet), layout.Q,
+            bc, bc0 = self.add(layout.pressure_dofs(pbc.facet), layout.Q,
                                 default_scalar_type(pbc.value), layout.p)
             if pbc.facet is not None and not pbc.in_undrained_steps:
                 self._drain.update({id(bc), id(bc0)})
         self.plate = RigidPlateControl(self, layout, plates[0], interface) if plates else None
 
-    def _add(self, dofs: np.ndarray, V: fem.FunctionSpace, value: fem.Constant | float,
+    def add(self, dofs: np.ndarray, V: fem.FunctionSpace, value: fem.Constant | float,
              target: fem.Function) -> tuple[fem.DirichletBC, fem.DirichletBC]:
         """Append a condition with value ``value`` and its homogeneous copy."""
         bc = fem.dirichletbc(value, dofs, V)
@@ -103,7 +99,7 @@ class RigidPlateControl:
         dofs = layout.facet_dofs(b, spec.facet, spec.component)
         Vc = b.V.sub(spec.component)
         self.U = fem.Constant(layout.mesh, default_scalar_type(0.0))
-        cons._add(dofs, Vc, self.U, b.u)
+        cons.add(dofs, Vc, self.U, b.u)
         self.unit_bcs = cons.bcs_zero[:-1] + [fem.dirichletbc(
             fem.Constant(layout.mesh, default_scalar_type(-1.0)), dofs, Vc)]
         self.owned = dofs[dofs < b.V.dofmap.index_map.size_local * 3]
@@ -135,43 +131,35 @@ class RigidPlateControl:
         """Return to the committed plate position."""
         self.set(self.committed)
 
-    def gap(self, problem: BiotProblem, load_factor: float) -> float:
+    def gap(self, problem: StepProblem, load_factor: float) -> float:
         """Plate resultant minus its target force (kN) at the current state."""
         return problem.block_resultant(self.owned, self.body) - self.target(load_factor)
 
-    def unit_response(self, problem: BiotProblem) -> PETSc.Vec:
+    def unit_response(self, problem: StepProblem) -> PETSc.Vec:
         """``dx_b``: the Newton response to a unit plate motion (cached until J changes)."""
         if self.db is None:
-            rhs = problem.tmp
-            with rhs.localForm() as rl:
-                rl.set(0.0)
-            unit_bcs = problem.active(self.unit_bcs)
-            fpetsc.apply_lifting(rhs, problem.J_forms, bcs=fem.bcs_by_block(
-                fem.extract_function_spaces(problem.J_forms, 1), unit_bcs), alpha=1.0)
-            rhs.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-            fpetsc.set_bc(rhs, fem.bcs_by_block(problem.spaces, unit_bcs))
             db = problem.dx.duplicate()
             db.setAttr("_blocks", problem.dx.getAttr("_blocks"))
-            problem.solve_linear(rhs, db)
+            problem.dirichlet_response(self.unit_bcs, db)
             self.db = db
         return self.db
 
-    def border(self, problem: BiotProblem, load_factor: float) -> float:
+    def border(self, problem: StepProblem, load_factor: float) -> float:
         """Correct the Newton increment ``problem.dx`` for the plate force; returns ``dU``."""
         db = self.unit_response(problem)
         x0 = problem.x.copy()
         xa = problem.x.copy()
         xa.axpy(-1.0, problem.dx)
-        problem.layout.x_to_fields(xa)
+        problem.x_to_fields(xa)
         problem.evaluate_laws()
         Ra = problem.block_resultant(self.owned, self.body)
         xb = xa.copy()
         xb.axpy(-1.0, db)
-        problem.layout.x_to_fields(xb)
+        problem.x_to_fields(xb)
         problem.evaluate_laws()
         Rb = problem.block_resultant(self.owned, self.body)
         dU = -(Ra - self.target(load_factor)) / (Rb - Ra)
         problem.dx.axpy(dU, db)
         self.set(self.value + dU)
-        problem.layout.x_to_fields(x0)
+        problem.x_to_fields(x0)
         return dU

@@ -20,9 +20,9 @@ from __future__ import annotations
 import resource
 import time
 import xml.etree.ElementTree as ET
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol, TypedDict
 
 import basix.ufl
 import h5py
@@ -35,10 +35,10 @@ from pilegroup.constitutive.base import mandel_to_tensor
 from pilegroup.fileio import atomic_path, write_json_atomic
 from pilegroup.geometry import groups
 from pilegroup.solver.qpstate import QuadratureState
+from pilegroup.solver.runlog import RunLog
 
 if TYPE_CHECKING:
     from pilegroup.solver.problem import BiotProblem
-    from pilegroup.solver.stepping import RunLog
 
 
 class Export(Protocol):
@@ -269,14 +269,67 @@ def write_summary(path: str | Path, data: dict[str, Any], comm: MPI.Comm) -> Non
     comm.barrier()
 
 
-def run_summary(problem: BiotProblem, log: RunLog, extra: dict[str, Any] | None = None
-                ) -> dict[str, Any]:
-    """All-reduced scalars of a run: sizes, steps, Newton/KSP counts, timings, extremes."""
+class StepHistory(TypedDict):
+    """One accepted step in a run summary (``history``)."""
+
+    stage: str
+    t: float
+    """End of the step, day."""
+    dt: float
+    """Step size, day (0: an instantaneous, undrained step)."""
+    load_factor: float
+    newton: int
+    ksp: int
+    seconds: float
+
+
+class SolverSummary(TypedDict, total=False):
+    """What :func:`run_summary` reports of a run (all-reduced; units in the names)."""
+
+    conventions: dict[str, str]
+    """Units and sign conventions of the numbers."""
+    created: str
+    """Local time of writing, ISO 8601."""
+    ranks: int
+    dofs: int
+    """Unknowns of the whole system."""
+    pair: str
+    """Element pair, e.g. ``"Q1Q1"``."""
+    linear_solver: str
+    """The linear-solver preset in use at the end."""
+    linear_solver_fallbacks: int
+    """Hand-overs to the preset's fallback."""
+    peak_rss_mb_per_rank: list[float]
+    steps: int
+    rejected_steps: int
+    newton_iterations: int
+    ksp_iterations: int
+    ksp_iterations_max_per_solve: int
+    wall_s: float
+    """Wall time of the stage loop (largest over the ranks)."""
+    timings_s: dict[str, float]
+    """Assembly, solve and law-update times (largest over the ranks)."""
+    geostatic_max_u_m: float | None
+    """Largest displacement of the geostatic equilibrium check."""
+    max_displacement_m: float
+    max_excess_pore_pressure_kPa: float
+    min_excess_pore_pressure_kPa: float
+    final_time_day: float
+    lu_factorisations: int
+    history: list[StepHistory]
+
+
+def run_summary(problem: BiotProblem, log: RunLog, extra: Mapping[str, Any] | None = None
+                ) -> SolverSummary:
+    """All-reduced scalars of a run: sizes, steps, Newton/KSP counts, timings, extremes.
+
+    ``extra`` (e.g. a scenario-aware run's own keys) is merged in last.
+    """
     comm = problem.comm
     timings = {k: comm.allreduce(v, op=MPI.MAX) for k, v in problem.timings.items()}
     nloc = problem.Q.dofmap.index_map.size_local
     pl = problem.p.x.array[:nloc]
-    out = {
+    out: SolverSummary = {
         "conventions": {"units": "kN, m, day (kPa, m/day)", "stress": "tension positive",
                         "excess_pore_pressure": "compression positive"},
         "created": time.strftime("%Y-%m-%dT%H:%M:%S"),
@@ -305,7 +358,7 @@ def run_summary(problem: BiotProblem, log: RunLog, extra: dict[str, Any] | None 
                      "newton": s.newton_its, "ksp": s.ksp_its, "seconds": s.seconds}
                     for s in log.steps],
     }
-    out.update(extra or {})
+    out.update(extra or {})  # type: ignore[typeddict-item]
     return out
 
 

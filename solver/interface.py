@@ -36,7 +36,6 @@ from __future__ import annotations
 
 import functools
 from collections.abc import Callable, Sequence
-from typing import Any
 
 import numpy as np
 import ufl
@@ -46,6 +45,7 @@ from dolfinx import mesh as dmesh
 from pilegroup.constitutive.base import ConstitutiveLaw
 from pilegroup.geometry import groups
 from pilegroup.geometry.meshdata import MeshData
+from pilegroup.solver.interface_groups import GaussGroup, InterfacePoints, NodalGroup
 from pilegroup.solver.layout import BodySplit
 from pilegroup.solver.qpstate import guarded_update
 
@@ -148,7 +148,7 @@ class NodalInterface:
             + ufl.inner(base_part("-"), psi("-")) * self.dS(BASE), Wsp)
         self.W = W.reshape(-1, 2 * L)
         self.A = self.W.sum(axis=1)
-        self.groups: list[dict[str, Any]] = self._build_groups(
+        self.groups: list[NodalGroup] | list[GaussGroup] = self._build_groups(
             md, ents, traction0, (shaft_part, base_part, psi, Wsp))
         # Coefficients of the forms: nodal traction and tangent (global frame).
         self.T = fem.Function(V_soil, name="interface_traction")
@@ -163,7 +163,7 @@ class NodalInterface:
 
     # ---------- setup helpers ----------
     def _build_groups(self, md: MeshData, ents: list, traction0: Callable,
-                      parts: tuple) -> list[dict[str, Any]]:
+                      parts: tuple) -> list[NodalGroup] | list[GaussGroup]:
         """One material point per (interface node, group): nodes, frames, weights, states."""
         L = self.split.n_layers
         degree = self.V_soil.ufl_element().embedded_superdegree
@@ -179,7 +179,7 @@ class NodalInterface:
         for axis, plane in ((0, groups.SYM_X), (1, groups.SYM_Y)):
             if plane in md.facet_names:
                 N[np.abs(xs[:, axis]) <= MIRROR_TOL, axis] = 0.0
-        points: list[dict[str, Any]] = []
+        points: list[NodalGroup] = []
         # Consistent initial tractions: traction0 is linear in z within a group, so its
         # phi_i-weighted mean over the group's facets is its value at the weighted height
         # zbar[i, m] = int_m z phi_i dS / W[i, m] (Gauss rule here: exact), and the lumped
@@ -206,9 +206,9 @@ class NodalInterface:
             law = self.laws[m]
             zbar = Zw[nodes, m] / self.W[nodes, m]
             state = law.initial_state(nodes.size, traction0(zbar, m)) if nodes.size else None
-            points.append({"nodes": nodes, "R": R, "w": self.W[nodes, m] / self.A[nodes],
-                           "c_n": c_n[nodes] if m < L else np.ones(nodes.size),
-                           "law": law, "state": state, "trial": state})
+            points.append(NodalGroup(nodes=nodes, R=R, w=self.W[nodes, m] / self.A[nodes],
+                                     c_n=c_n[nodes] if m < L else np.ones(nodes.size),
+                                     law=law, state=state, trial=state))
         return points
 
     @staticmethod
@@ -291,18 +291,18 @@ class NodalInterface:
         T = np.zeros_like(jump)
         D = np.zeros((jump.shape[0], 3, 3))
         for m, g in enumerate(self.groups):
-            nodes = g["nodes"]
+            nodes = g.nodes
             if nodes.size == 0:
                 continue
-            R = g["R"]
+            R = g.R
             d_loc = np.einsum("nij,nj->ni", R, d_jump[nodes])
-            t_loc, trial, D_loc, error = guarded_update(g["law"], d_loc, g["state"], dt)
+            t_loc, trial, D_loc, error = guarded_update(g.law, d_loc, g.state, dt)
             if error:
                 self.last_error = f"interface group {m}: {error}"
-            g["trial"] = trial
-            w = g["w"]
+            g.trial = trial
+            w = g.w
             c = np.ones((nodes.size, 3))
-            c[:, 0] = g["c_n"]
+            c[:, 0] = g.c_n
             np.add.at(T, nodes, w[:, None] * np.einsum("nji,nj->ni", R, c * t_loc))
             np.add.at(D, nodes, w[:, None, None] * np.einsum("nki,nkl,nlj->nij", R,
                                                              c[:, :, None] * D_loc, R))
@@ -312,13 +312,13 @@ class NodalInterface:
     def commit(self) -> None:
         """Adopt the trial state of the last :meth:`update` (after a converged step)."""
         for g in self.groups:
-            g["state"] = g["trial"]
+            g.state = g.trial
         self._jump_committed[:] = self.jump.x.array
 
     def rollback(self) -> None:
         """Forget the trial state (after a failed step)."""
         for g in self.groups:
-            g["trial"] = g["state"]
+            g.trial = g.state
 
     def saved_state(self) -> dict[str, np.ndarray]:
         """The committed state as arrays (checkpoint): each group's law state and the jump.
@@ -326,8 +326,8 @@ class NodalInterface:
         Names: ``<group>/<key>`` for the law states, ``jump`` for the committed jump; the
         arrays are this rank's points (nodes or Gauss points).
         """
-        out = {f"{m}/{k}": v for m, g in enumerate(self.groups) if g["state"] is not None
-               for k, v in g["state"].items()}
+        out = {f"{m}/{k}": v for m, g in enumerate(self.groups) if g.state is not None
+               for k, v in g.state.items()}
         out["jump"] = self._jump_committed.copy()
         return out
 
@@ -336,15 +336,15 @@ class NodalInterface:
         if arrays["jump"].shape != self._jump_committed.shape:
             raise ValueError("saved interface jump does not fit this rank's interface nodes")
         for m, g in enumerate(self.groups):
-            if g["state"] is None:
+            if g.state is None:
                 continue
-            n = next(iter(g["state"].values())).shape[0]
+            n = next(iter(g.state.values())).shape[0]
             state = {k.split("/", 1)[1]: np.array(a) for k, a in arrays.items()
                      if k.split("/", 1)[0] == str(m)}
-            if set(state) != set(g["state"]) or any(a.shape[0] != n for a in state.values()):
+            if set(state) != set(g.state) or any(a.shape[0] != n for a in state.values()):
                 raise ValueError(f"saved state of interface group {m} does not fit its {n} "
                                  "points on this rank")
-            g["state"] = g["trial"] = state
+            g.state = g.trial = state
         self._jump_committed[:] = arrays["jump"]
         self.jump.x.array[:] = arrays["jump"]
 
@@ -372,11 +372,11 @@ class NodalInterface:
         jump = self._jump_committed.reshape(-1, 3)
         out["jump"][:] = jump
         for g in self.groups:
-            nodes = g["nodes"]
+            nodes = g.nodes
             if nodes.size == 0:
                 continue
-            st, w = g["state"], g["w"][:, None]
-            loc = np.einsum("nij,nj->ni", g["R"], jump[nodes])
+            st, w = g.state, g.w[:, None]
+            loc = np.einsum("nij,nj->ni", g.R, jump[nodes])
             for key, val in (("normal_traction", st["traction"][:, :1]),
                              ("shear_traction_vertical", st["traction"][:, 1:2]),
                              ("shear_traction_circumferential", st["traction"][:, 2:3]),
@@ -393,7 +393,7 @@ class NodalInterface:
         """Coordinates (m) of the soil displacement nodes (local numbering)."""
         return self.V_soil.tabulate_dof_coordinates()
 
-    def material_points(self, m: int) -> dict[str, np.ndarray | Any]:
+    def material_points(self, m: int) -> InterfacePoints:
         """The committed material points of group ``m`` (here: its interface nodes).
 
         Keys: ``weight`` (m^2, the point's integration weight; 0 on a rank that does not own
@@ -402,12 +402,12 @@ class NodalInterface:
         ``None`` without points), ``jump_local`` (m, ``[opening, slip1, slip2]``).
         """
         g = self.groups[m]
-        nodes = g["nodes"]
+        nodes = g.nodes
         own = nodes < self.V_soil.dofmap.index_map.size_local
         jump = self._jump_committed.reshape(-1, 3)[nodes]
-        return {"weight": np.where(own, self.W[nodes, m], 0.0),
-                "x": self._soil_coords[nodes], "node": nodes,
-                "state": g["state"], "jump_local": np.einsum("nij,nj->ni", g["R"], jump)}
+        return InterfacePoints(weight=np.where(own, self.W[nodes, m], 0.0),
+                               x=self._soil_coords[nodes], node=nodes, state=g.state,
+                               jump_local=np.einsum("nij,nj->ni", g.R, jump))
 
     def reset_jump(self) -> None:
         """Take the current displacements as the reference (after the geostatic stage).

@@ -18,6 +18,7 @@ from petsc4py import PETSc
 
 from pilegroup.geometry.meshdata import MeshData
 from pilegroup.solver.interface import BASE, SHAFT, NodalInterface
+from pilegroup.solver.interface_groups import GaussGroup, InterfacePoints
 from pilegroup.solver.qpstate import guarded_update
 
 # 2 x 2 Gauss rule on the unit square (s, t) in [0, 1]^2, weights 1/4, and the bilinear shape
@@ -63,7 +64,7 @@ class GaussInterface(NodalInterface):
     has_matrix = True
 
     def _build_groups(self, md: MeshData, ents: list, traction0: Callable,
-                      parts: tuple) -> list[dict[str, Any]]:
+                      parts: tuple) -> list[GaussGroup]:
         """Facet data per group: soil/structure nodes, Gauss weights, frames, states."""
         if self.V_soil.ufl_element().embedded_superdegree != 1:
             raise ValueError("interface quadrature 'gauss' needs degree-1 (Q1) displacements; "
@@ -101,7 +102,7 @@ class GaussInterface(NodalInterface):
         nc *= np.where(np.einsum("fi,fi->f", nc, into) < 0.0, -1.0, 1.0)[:, None]
         layer = split.soil_layer[e[:, 2]]
         gid = np.where(kind == SHAFT, layer, L + layer)
-        groups: list[dict[str, Any]] = []
+        groups: list[GaussGroup] = []
         for m in range(2 * L):
             sel = np.flatnonzero(gid == m)
             nf = sel.size
@@ -113,9 +114,9 @@ class GaussInterface(NodalInterface):
             state = law.initial_state(4 * nf, traction0(x[:, 2], m)) if nf else None
             dofs = [(3 * f[:, :, None] + np.arange(3)).reshape(nf, 12).astype(np.int32)
                     for f in (fn_s[sel], fn_t[sel])]
-            groups.append({"fnodes": fn_s[sel], "dofs_soil": dofs[0], "dofs_struct": dofs[1],
-                           "wJ": wJ[sel], "x": x, "R": R, "law": law, "state": state,
-                           "trial": state, "K": np.zeros((nf, 12, 12))})
+            groups.append(GaussGroup(fnodes=fn_s[sel], dofs_soil=dofs[0], dofs_struct=dofs[1],
+                                     wJ=wJ[sel], x=x, R=R, law=law, state=state, trial=state,
+                                     K=np.zeros((nf, 12, 12))))
         return groups
 
     def _scatter_add(self, a: np.ndarray) -> np.ndarray:
@@ -128,7 +129,7 @@ class GaussInterface(NodalInterface):
 
     def _at_points(self, g: dict[str, Any], nodal: np.ndarray) -> np.ndarray:
         """Nodal vectors ``(n_nodes, 3)`` interpolated to the group's Gauss points."""
-        return np.einsum("ga,fai->fgi", _NG, nodal[g["fnodes"]]).reshape(-1, 3)
+        return np.einsum("ga,fai->fgi", _NG, nodal[g.fnodes]).reshape(-1, 3)
 
     def update(self, u_struct: fem.Function, u_soil: fem.Function, dt: float) -> None:
         """Evaluate every group's law at its Gauss points; fill ``T`` and the facet tangents."""
@@ -137,20 +138,20 @@ class GaussInterface(NodalInterface):
         d_jump = jump - self._jump_committed.reshape(-1, 3)
         F = np.zeros_like(jump)
         for m, g in enumerate(self.groups):
-            nf = g["fnodes"].shape[0]
+            nf = g.fnodes.shape[0]
             if nf == 0:
                 continue
-            R = g["R"]
+            R = g.R
             d_loc = np.einsum("nij,nj->ni", R, self._at_points(g, d_jump))
-            t_loc, trial, D_loc, error = guarded_update(g["law"], d_loc, g["state"], dt)
+            t_loc, trial, D_loc, error = guarded_update(g.law, d_loc, g.state, dt)
             if error:
                 self.last_error = f"interface group {m}: {error}"
-            g["trial"] = trial
-            t = np.einsum("nji,nj->ni", R, t_loc).reshape(nf, 4, 3) * g["wJ"][:, :, None]
-            np.add.at(F, g["fnodes"], np.einsum("ga,fgi->fai", _NG, t))
+            g.trial = trial
+            t = np.einsum("nji,nj->ni", R, t_loc).reshape(nf, 4, 3) * g.wJ[:, :, None]
+            np.add.at(F, g.fnodes, np.einsum("ga,fgi->fai", _NG, t))
             D = np.einsum("nki,nkl,nlj->nij", R, D_loc, R).reshape(nf, 4, 3, 3)
-            g["K"] = np.einsum("ga,gb,fgij->faibj", _NG, _NG,
-                               D * g["wJ"][:, :, None, None]).reshape(nf, 12, 12)
+            g.K = np.einsum("ga,gb,fgij->faibj", _NG, _NG,
+                            D * g.wJ[:, :, None, None]).reshape(nf, 12, 12)
         F = self._scatter_add(F)
         A = self.A[:, None]
         self.T.x.array[:] = np.divide(F, A, out=np.zeros_like(F), where=A > 0).ravel()
@@ -167,11 +168,11 @@ class GaussInterface(NodalInterface):
         structure-structure ``+K`` (the residual is ``+f`` on the soil, ``-f`` on the pile and
         ``f`` depends on ``u_soil - u_struct``). Calls ``A.assemble()``.
         """
-        gs = [g for g in self.groups if g["fnodes"].shape[0]]
+        gs = [g for g in self.groups if g.fnodes.shape[0]]
         if gs:
-            K = np.concatenate([g["K"] for g in gs])
-            ds = np.concatenate([g["dofs_soil"] for g in gs])
-            dt = np.concatenate([g["dofs_struct"] for g in gs])
+            K = np.concatenate([g.K for g in gs])
+            ds = np.concatenate([g.dofs_soil for g in gs])
+            dt = np.concatenate([g.dofs_struct for g in gs])
         else:
             K, ds, dt = np.zeros((0, 12, 12)), np.zeros((0, 12), np.int32), np.zeros((0, 12),
                                                                                    np.int32)
@@ -189,10 +190,10 @@ class GaussInterface(NodalInterface):
 
     def touched_dofs(self, body: str) -> np.ndarray:
         """Local unrolled dofs of ``body`` (``"soil"``/``"structure"``) on interface facets."""
-        key = "dofs_soil" if body == "soil" else "dofs_struct"
-        return np.unique(np.concatenate([g[key].ravel() for g in self.groups]))
+        return np.unique(np.concatenate([(g.dofs_soil if body == "soil" else g.dofs_struct).ravel()
+                                         for g in self.groups]))
 
-    def material_points(self, m: int) -> dict[str, np.ndarray | Any]:
+    def material_points(self, m: int) -> InterfacePoints:
         """The committed Gauss points of group ``m``.
 
         Keys as :meth:`NodalInterface.material_points`; ``node`` is the first node of the
@@ -200,9 +201,8 @@ class GaussInterface(NodalInterface):
         """
         g = self.groups[m]
         jump = self._at_points(g, self._jump_committed.reshape(-1, 3))
-        return {"weight": g["wJ"].ravel(), "x": g["x"],
-                "node": np.repeat(g["fnodes"][:, 0], 4), "state": g["state"],
-                "jump_local": np.einsum("nij,nj->ni", g["R"], jump)}
+        return InterfacePoints(weight=g.wJ.ravel(), x=g.x, node=np.repeat(g.fnodes[:, 0], 4),
+                               state=g.state, jump_local=np.einsum("nij,nj->ni", g.R, jump))
 
     def nodal_fields(self) -> dict[str, np.ndarray]:
         """Committed state per soil node: area-weighted averages of the Gauss-point values.
@@ -215,7 +215,7 @@ class GaussInterface(NodalInterface):
         keys = [k for k in self.FIELDS if k != "jump"]
         acc = np.zeros((n, len(keys) + 1))
         for m, g in enumerate(self.groups):
-            nf = g["fnodes"].shape[0]
+            nf = g.fnodes.shape[0]
             if nf == 0:
                 continue
             p = self.material_points(m)
@@ -223,7 +223,7 @@ class GaussInterface(NodalInterface):
             vals = np.column_stack([st["traction"], p["jump_local"],
                                     np.linalg.norm(st["slip_vp"], axis=1), st["detached"][:, 0],
                                     np.ones(4 * nf)]).reshape(nf, 4, -1)
-            np.add.at(acc, g["fnodes"], np.einsum("ga,fg,fgk->fak", _NG, g["wJ"], vals))
+            np.add.at(acc, g.fnodes, np.einsum("ga,fg,fgk->fak", _NG, g.wJ, vals))
         acc = self._scatter_add(acc)
         w = acc[:, -1:]
         avg = np.divide(acc[:, :-1], w, out=np.zeros((n, len(keys))), where=w > 0)

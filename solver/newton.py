@@ -1,15 +1,10 @@
-"""Newton's method with a backtracking line search, over a small problem protocol.
+"""Newton's method with a backtracking line search, over the step protocol.
 
-The driver knows nothing of forms or meshes. A problem offers (see
-:class:`~pilegroup.solver.problem.BiotProblem`):
-
-* ``set_step(dt, load_factor)``: step size, loads and prescribed values; fields -> ``x``;
-* ``residual_state(load_factor) -> (block norms, plate gap)``: evaluate the laws at the
-  current fields and assemble the residual ``b`` (raises ``ConvergenceError`` on NaN);
-* ``force_scales(load_factor)``: force scales (kN) of the displacement blocks;
-* ``assemble_jacobian()`` and ``solve_linear(b, dx) -> Krylov iterations``;
-* ``x``, ``b``, ``dx`` (PETSc block vectors), ``layout`` (``x_to_fields``, ``block_norms``,
-  ``u_blocks``) and ``plate`` (``None`` or a rigid plate with ``border`` and ``set``).
+The driver knows nothing of forms or meshes: it uses a problem only through
+:class:`~pilegroup.solver.step_protocol.StepProblem` (``set_step``, ``residual_state`` (laws
+and residual ``b``; raises ``ConvergenceError`` on NaN), ``assemble_jacobian``,
+``solve_linear``, ``force_scales``, the block vectors ``x``, ``b``, ``dx`` with
+``block_norms`` and ``x_to_fields``, and the rigid ``plate`` with its ``plate_block``).
 
 Convergence (every block): ``|r_i| <= rtol * ref_i + atol``, with ``ref_i`` the largest
 residual norm of the block seen at the start of a step so far in the run; the displacement
@@ -23,40 +18,22 @@ by block. A step never accepts a non-converged state.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
 
 import numpy as np
 from petsc4py import PETSc
 
 from pilegroup.errors import ConvergenceError, LinearSolveError
 from pilegroup.solver.inputs import NewtonOptions
-
-if TYPE_CHECKING:
-    from pilegroup.solver.problem import BiotProblem
-
-
-@dataclass
-class StepInfo:
-    """Outcome of one attempted step."""
-
-    converged: bool
-    newton_its: int = 0
-    ksp_its: int = 0
-    ksp_max: int = 0  # Krylov iterations of the step's hardest Newton solve
-    linear_failure: bool = False  # the step failed in a Krylov solve (not in Newton)
-    residuals: list[tuple[float, ...]] = field(default_factory=list)
-    message: str = ""
-    seconds: float = 0.0
+from pilegroup.solver.step_protocol import StepInfo, StepProblem
 
 
 class NewtonSolver:
     """Newton iterations of one step; keeps the run's residual references between steps."""
 
-    def __init__(self, problem: BiotProblem, options: NewtonOptions) -> None:
+    def __init__(self, problem: StepProblem, options: NewtonOptions) -> None:
         self.problem = problem
         self.options = options
-        self.R_run = np.zeros(len(problem.layout.fields))
+        self.R_run = np.zeros(problem.block_count)
 
     def solve(self, dt: float, load_factor: float) -> StepInfo:
         """Solve one step; never raises on non-convergence (``converged = False``)."""
@@ -81,10 +58,10 @@ class NewtonSolver:
                 info.ksp_its += its
                 info.ksp_max = max(info.ksp_max, its)
                 dU = pb.plate.border(pb, load_factor) if pb.plate is not None else 0.0
-                dxn = pb.layout.block_norms(pb.dx)
+                dxn = pb.block_norms(pb.dx)
                 if not np.all(np.isfinite(dxn)):
                     raise ConvergenceError("NaN Newton increment")
-                xn = pb.layout.block_norms(pb.x)
+                xn = pb.block_norms(pb.x)
                 ok_inc = bool(np.all(dxn <= nw.stol * np.maximum(xn, 1e-300)))
                 info.newton_its = it + 1
                 rn, gap = self._line_search(rn, gap, ref, dU, load_factor)
@@ -102,11 +79,11 @@ class NewtonSolver:
         """Residual references of the step (see the module docstring); updates the run's."""
         pb = self.problem
         ref = np.maximum(self.R_run, rn)
-        u_blocks = pb.layout.u_blocks
+        u_blocks = pb.u_blocks
         for i, fn in zip(u_blocks, pb.force_scales(), strict=True):
             ref[i] = max(ref[i], fn)
-        if pb.plate is not None:
-            ib = pb.layout.block_of(pb.layout.bodies[pb.plate.body])
+        if pb.plate is not None and pb.plate_block is not None:
+            ib = pb.plate_block
             ref[ib] = max(ref[ib], abs(pb.plate.target(load_factor)))
         ref[u_blocks] = np.max(ref[u_blocks])
         self.R_run = np.maximum(self.R_run, ref)
@@ -148,7 +125,7 @@ class NewtonSolver:
             pb.x.axpy(-alpha, pb.dx)
             if plate is not None:
                 plate.set(U_old + alpha * dU)
-            pb.layout.x_to_fields(pb.x)
+            pb.x_to_fields(pb.x)
             try:
                 rn, gap = pb.residual_state(load_factor)
                 m1 = merit(rn, gap)

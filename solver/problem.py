@@ -47,8 +47,9 @@ from pilegroup.solver.interface import NodalInterface
 from pilegroup.solver.interface_gauss import GaussInterface
 from pilegroup.solver.layout import BlockLayout, Body
 from pilegroup.solver.linsolve import KSPSolver, get_preset
-from pilegroup.solver.newton import NewtonSolver, StepInfo
+from pilegroup.solver.newton import NewtonSolver
 from pilegroup.solver.qpstate import QuadratureState
+from pilegroup.solver.step_protocol import StepInfo
 
 
 class BiotProblem:
@@ -215,6 +216,47 @@ class BiotProblem:
         return self.constraints.plate
 
     @property
+    def plate_block(self) -> int | None:
+        """Block of the body the rigid plate acts on, if any."""
+        plate = self.constraints.plate
+        return None if plate is None else self.layout.block_of(self.bodies[plate.body])
+
+    @property
+    def block_count(self) -> int:
+        """Number of blocks (fields) of the block vectors."""
+        return len(self.layout.fields)
+
+    @property
+    def u_blocks(self) -> list[int]:
+        """Blocks of the displacement fields."""
+        return list(self.layout.u_blocks)
+
+    def block_norms(self, vec: PETSc.Vec) -> np.ndarray:
+        """Euclidean norm of each block of ``vec`` over the owned dofs."""
+        return self.layout.block_norms(vec)
+
+    def x_to_fields(self, vec: PETSc.Vec) -> None:
+        """Put the block vector ``vec`` into the fields."""
+        self.layout.x_to_fields(vec)
+
+    def dirichlet_response(self, bcs: list[fem.DirichletBC], out: PETSc.Vec) -> None:
+        """Solve the Newton system for the lifting of the conditions ``bcs`` into ``out``.
+
+        The right-hand side is ``-J g`` off the constrained dofs and ``g`` on them (``g`` the
+        conditions' values; the drainage conditions of an undrained step are left out), so
+        ``out`` is the increment that moves the constrained dofs by ``g`` (collective).
+        """
+        rhs = self.tmp
+        with rhs.localForm() as rl:
+            rl.set(0.0)
+        active = self.active(bcs)
+        fpetsc.apply_lifting(rhs, self.J_forms, bcs=fem.bcs_by_block(
+            fem.extract_function_spaces(self.J_forms, 1), active), alpha=1.0)
+        rhs.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        fpetsc.set_bc(rhs, fem.bcs_by_block(self.spaces, active))
+        self.solve_linear(rhs, out)
+
+    @property
     def plate_U(self) -> float:
         """Current rigid-plate displacement, m (0 without a plate)."""
         return self.plate.value if self.plate is not None else 0.0
@@ -325,8 +367,8 @@ class BiotProblem:
         """Linear problem: every law linear (interface laws declare ``linear = True``)."""
         lin = all(b.qp.linear for b in self.bodies)
         if self.interface is not None:
-            lin = lin and all(getattr(g["law"], "linear", False) for g in self.interface.groups
-                              if g["law"] is not None)
+            lin = lin and all(getattr(g.law, "linear", False) for g in self.interface.groups
+                              if g.law is not None)
         return lin
 
     def assemble_jacobian(self, force: bool = False) -> bool:

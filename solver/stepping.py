@@ -29,47 +29,14 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
 
 from pilegroup.errors import SolverError, StepFailure
 from pilegroup.solver.exports import Export
 from pilegroup.solver.inputs import SolverStage, StepControl
+from pilegroup.solver.runlog import RunLog, StepRecord
+from pilegroup.solver.step_protocol import StepInfo, StepProblem
 
-if TYPE_CHECKING:
-    from pilegroup.solver.newton import StepInfo
-    from pilegroup.solver.problem import BiotProblem
-
-
-@dataclass
-class StepRecord:
-    """One accepted step."""
-
-    stage: str
-    t: float
-    dt: float
-    load_factor: float
-    newton_its: int
-    ksp_its: int
-    seconds: float
-    ksp_max: int = 0  # Krylov iterations of the step's hardest Newton solve
-
-
-@dataclass
-class RunLog:
-    """Everything the stepper did: accepted steps and rejected attempts."""
-
-    steps: list[StepRecord] = field(default_factory=list)
-    rejected: int = 0
-    geostatic_max_u: float | None = None
-    wall_s: float = 0.0
-
-    @property
-    def newton_total(self) -> int:
-        """Newton iterations of the accepted steps."""
-        return sum(s.newton_its for s in self.steps)
-
-
-Callback = Callable[["BiotProblem", float, str], None]
+Callback = Callable[[StepProblem, float, str], None]
 
 
 class AdaptiveStepper:
@@ -93,7 +60,7 @@ class AdaptiveStepper:
 
     def advance(
         self,
-        problem: BiotProblem,
+        problem: StepProblem,
         t0: float,
         t1: float,
         load_factor: Callable[[float], float],
@@ -148,7 +115,7 @@ class AdaptiveStepper:
                 on_milestone(problem, t, stage)
         return t
 
-    def _reject(self, problem: BiotProblem, info: StepInfo, t: float, dt: float,
+    def _reject(self, problem: StepProblem, info: StepInfo, t: float, dt: float,
                 load_factor: Callable[[float], float], stage: str) -> None:
         """Roll a failed step back and cut ``dt``, or hand over to a fallback linear solver.
 
@@ -219,11 +186,11 @@ class RunState:
 
 #: ``boundary(problem, state, output)``: called at every step boundary (after an accepted or
 #: rejected step; ``output`` true when an output time was just written), collectively.
-Boundary = Callable[["BiotProblem", RunState, bool], None]
+Boundary = Callable[[StepProblem, RunState, bool], None]
 
 
 def run_stages(
-    problem: BiotProblem,
+    problem: StepProblem,
     stages: Sequence[SolverStage],
     ts: StepControl,
     on_milestone: Callback | None = None,
@@ -236,7 +203,8 @@ def run_stages(
     """Run the stages in order; returns the :class:`RunLog`.
 
     Args:
-        problem: a :class:`~pilegroup.solver.problem.BiotProblem`.
+        problem: a :class:`~pilegroup.solver.step_protocol.StepProblem` (e.g. a
+            :class:`~pilegroup.solver.problem.BiotProblem`).
         stages: the stages.
         ts: time-stepping rules (milestones in absolute time, day).
         on_milestone: called at stage ends and milestone times, after the exports.
@@ -249,7 +217,7 @@ def run_stages(
             checkpoint, or raise to stop the run there).
     """
 
-    def milestone(pb: BiotProblem, t: float, stage: str) -> None:
+    def milestone(pb: StepProblem, t: float, stage: str) -> None:
         for e in exports:
             e.write(t, stage)
         if on_milestone is not None:
@@ -270,7 +238,7 @@ def run_stages(
 class _Run:
     """The stage loop of :func:`run_stages`, resumable from a :class:`RunState`."""
 
-    def __init__(self, problem: BiotProblem, stages: Sequence[SolverStage], ts: StepControl,
+    def __init__(self, problem: StepProblem, stages: Sequence[SolverStage], ts: StepControl,
                  state: RunState, boundary: Boundary | None) -> None:
         self.problem, self.stages, self.ts = problem, stages, ts
         self.state, self.boundary = state, boundary

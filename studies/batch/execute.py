@@ -56,7 +56,14 @@ from tqdm.contrib.logging import logging_redirect_tqdm
 from pilegroup.errors import PilegroupError, ScenarioError
 from pilegroup.fileio import write_json_atomic
 from pilegroup.studies.batch.batch_plan import BatchPlan, ResolvedCase, queue_order, resolve_cases
-from pilegroup.studies.batch.rows import RECORD, case_row, counts, is_complete, write_tables
+from pilegroup.studies.batch.rows import (
+    RECORD,
+    BatchRow,
+    case_row,
+    counts,
+    is_complete,
+    write_tables,
+)
 from pilegroup.studies.run.interrupt import abort_job
 from pilegroup.studies.run.job import run_scenario
 
@@ -74,7 +81,7 @@ PROGRESS_ENV = "PILEGROUP_PROGRESS"
 class BatchResult:
     """The rows of ``batch.json`` (world rank 0 only; empty elsewhere) and the failed count."""
 
-    rows: list[dict[str, Any]] = field(default_factory=list)
+    rows: list[BatchRow] = field(default_factory=list)
     failed: int = 0
 
 
@@ -276,7 +283,7 @@ class _Monitor:
         self.bar.set_postfix_str(f"running {c['running']}, failed {c['failed']}, "
                                  f"estimate {eta} left", refresh=True)
 
-    def finish(self) -> list[dict[str, Any]]:
+    def finish(self) -> list[BatchRow]:
         """Stop watching, refresh once more and close the progress bar; the rows."""
         self._stop.set()
         self._thread.join()

@@ -22,7 +22,7 @@ import json
 import math
 import time
 from pathlib import Path
-from typing import Any
+from typing import Any, TypedDict
 
 import numpy as np
 
@@ -43,6 +43,50 @@ SERIES = {"head_force_kN": "head_force_kN[pile {}]",
           "layer_friction_kPa": "shaft_friction_kPa[{}]",
           "layer_relative_displacement_m": "relative_displacement_m[{}]"}
 
+
+
+class BatchRow(TypedDict, total=False):
+    """One case of a batch (``batch.json``'s ``cases``; ``batch.csv`` flattens it)."""
+
+    name: str
+    status: str
+    """``pending``, ``running``, ``complete`` or ``failed``."""
+    skipped: bool
+    """Complete before this batch started (not run again)."""
+    message: str | None
+    """Failed: why, one line."""
+    overrides: dict[str, Any]
+    """The case's scenario keys (dotted) and values."""
+    run_dir: str
+    start: float | None
+    """Wall-clock start, seconds since the epoch."""
+    end: float | None
+    ranks: int | None
+    peak_rss_scope: str | None
+    """What the memory numbers cover (the case's own process group, or the batch's ranks)."""
+    rss_at_start_mb: list[float] | None
+    estimated_cells: int
+    digest: str
+    """Digest of the case's resolved scenario."""
+    wall_s: float | None
+    cells: int | None
+    unknowns: int | None
+    symmetry: str | None
+    newton: int | None
+    krylov: int | None
+    peak_rss_mb_per_rank: list[float] | None
+    peak_rss_mb_max: float | None
+    run_wall_s: float | None
+    reason: str | None
+    output_days: list[float]
+    settlement_m: list[float | None]
+    """Cap settlement at each output day, m."""
+    centre_pile: int
+    head_force_kN: dict[str, list[float | None]]
+    """Per pile (number as text): head force at each output day."""
+    layer_friction_kPa: dict[str, list[float | None]]
+    """Per layer (``"j name"``): the centre pile's mean shaft friction at each output day."""
+    layer_relative_displacement_m: dict[str, list[float | None]]
 
 
 def is_complete(run_dir: Path, digest: str) -> bool:
@@ -106,7 +150,7 @@ def _solver_numbers(run_dir: Path) -> dict[str, Any]:
             "run_wall_s": summary.get("wall_s"), "reason": summary.get("reason")}
 
 
-def case_row(rc: ResolvedCase, run_dir: Path, skipped: bool = False) -> dict[str, Any]:
+def case_row(rc: ResolvedCase, run_dir: Path, skipped: bool = False) -> BatchRow:
     """The row of case ``rc``: its record (or ``pending``), solver numbers and results."""
     record = read_json(run_dir / RECORD) or {}
     status = record.get("status", "pending")
@@ -114,7 +158,7 @@ def case_row(rc: ResolvedCase, run_dir: Path, skipped: bool = False) -> dict[str
         status = "pending"  # a record of another scenario under the same name
     if skipped:
         status = "complete"
-    row: dict[str, Any] = {"name": rc.name, "status": status, "skipped": skipped,
+    row: BatchRow = {"name": rc.name, "status": status, "skipped": skipped,
                            "message": record.get("message"), "overrides": rc.case.override_dict(),
                            "run_dir": str(run_dir), "start": record.get("start"),
                            "end": record.get("end"), "ranks": record.get("ranks"),
@@ -124,8 +168,8 @@ def case_row(rc: ResolvedCase, run_dir: Path, skipped: bool = False) -> dict[str
     start, end = row["start"], row["end"]
     row["wall_s"] = None if start is None or end is None else end - start
     if status in ("complete", "failed"):
-        row.update(_solver_numbers(run_dir))
-        row.update(_results(run_dir))
+        row.update(_solver_numbers(run_dir))  # type: ignore[typeddict-item]
+        row.update(_results(run_dir))  # type: ignore[typeddict-item]
         if row["wall_s"] is None:
             row["wall_s"] = row.get("run_wall_s")
         if status == "failed" and not row["message"]:
@@ -133,7 +177,7 @@ def case_row(rc: ResolvedCase, run_dir: Path, skipped: bool = False) -> dict[str
     return row
 
 
-def _flat(row: dict[str, Any], override_keys: list[str]) -> dict[str, Any]:
+def _flat(row: BatchRow, override_keys: list[str]) -> dict[str, Any]:
     out = {k: row.get(k) for k in HEAD}
     rss = row.get("peak_rss_mb_per_rank")
     out["peak_rss_mb_per_rank"] = ";".join(f"{x:.0f}" for x in rss) if rss else None
@@ -150,7 +194,7 @@ def _flat(row: dict[str, Any], override_keys: list[str]) -> dict[str, Any]:
     return out
 
 
-def csv_text(rows: list[dict[str, Any]]) -> str:
+def csv_text(rows: list[BatchRow]) -> str:
     """``batch.csv``: one row per case; the union of every row's columns, in first-seen order."""
     keys: list[str] = []
     for r in rows:
@@ -167,7 +211,7 @@ def csv_text(rows: list[dict[str, Any]]) -> str:
     return buf.getvalue()
 
 
-def counts(rows: list[dict[str, Any]]) -> dict[str, int]:
+def counts(rows: list[BatchRow]) -> dict[str, int]:
     """How many cases are in each status."""
     out = {s: 0 for s in ("complete", "failed", "running", "pending")}
     for r in rows:
@@ -175,7 +219,7 @@ def counts(rows: list[dict[str, Any]]) -> dict[str, int]:
     return out
 
 
-def write_tables(out: Path, rows: list[dict[str, Any]], head: dict[str, Any]) -> None:
+def write_tables(out: Path, rows: list[BatchRow], head: dict[str, Any]) -> None:
     """Write ``batch.json`` (``head`` plus the rows) and ``batch.csv``, each atomically."""
     doc = {**head, "updated": time.strftime("%Y-%m-%dT%H:%M:%S"), "counts": counts(rows),
            "cases": rows}
@@ -183,5 +227,5 @@ def write_tables(out: Path, rows: list[dict[str, Any]], head: dict[str, Any]) ->
     write_text_atomic(out / BATCH_CSV, csv_text(rows))
 
 
-__all__ = ["BATCH_CSV", "BATCH_JSON", "RECORD", "case_row", "counts", "csv_text", "is_complete",
-           "read_json", "write_tables"]
+__all__ = ["BATCH_CSV", "BATCH_JSON", "RECORD", "BatchRow", "case_row", "counts", "csv_text",
+           "is_complete", "read_json", "write_tables"]

@@ -22,7 +22,7 @@ from typing import Any
 
 from mpi4py import MPI
 
-from pilegroup.geometry.adapter import geometry_spec
+from pilegroup.geometry.adapter import resolve_geometry
 from pilegroup.geometry.convert import build_mesh
 from pilegroup.model import load_scenario
 from pilegroup.solver.probes import SettlementProbe
@@ -72,7 +72,8 @@ def scenario_rows(path: str, factors: Sequence[float] = (1.0, 10.0, 100.0)
     stages and time stepping are those of ``pilegroup run`` (studies/run/pipeline.py).
     """
     sc0 = load_scenario(path)
-    md = build_mesh(geometry_spec(sc0), MPI.COMM_WORLD)
+    geo = resolve_geometry(sc0)
+    md = build_mesh(geo.spec, MPI.COMM_WORLD)
     rows = []
     for f in factors:
         for q in QUADRATURES:
@@ -80,7 +81,7 @@ def scenario_rows(path: str, factors: Sequence[float] = (1.0, 10.0, 100.0)
             sc = dataclasses.replace(sc0, interface=dataclasses.replace(
                 itf, quadrature=q, normal_stiffness_factor=f * itf.normal_stiffness_factor))
             t0 = time.perf_counter()
-            pb = build_problem(sc, md)
+            pb = build_problem(sc, geo, md)
             probe = SettlementProbe(pb, load_facets(sc, md))
             log = run_stages(pb, solver_stages(sc), time_stepping(sc),
                              geostatic_tol=GEOSTATIC_TOL_M)

@@ -27,20 +27,19 @@ import platform
 import time
 from collections.abc import Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 from matplotlib.figure import Figure
 
 from pilegroup.errors import ScenarioError
 from pilegroup.fileio import atomic_path, write_text_atomic
+from pilegroup.studies.batch.rows import BatchRow
 from pilegroup.studies.campaigns.gci import GCIResult, gci
+from pilegroup.studies.campaigns.mesh_records import PenaltyRow, SizeRow, StudyCase, StudyInfo
 from pilegroup.studies.campaigns.mesh_report_md import SETTLEMENT, paper_gci, report_markdown
 from pilegroup.studies.report.paper_values import PAPER_ELEMENTS, PAPER_HOURS, PAPER_SETTLEMENT_CM
 from pilegroup.studies.results.rundata import load_run
-
-if TYPE_CHECKING:  # the study imports this module
-    from pilegroup.studies.campaigns.mesh_study import StudyCase, StudyInfo
 
 FIGURES = ("settlement_vs_h.png", "error_vs_time.png", "friction_profiles_sizes.png",
            "relative_displacement_profiles_sizes.png")
@@ -95,11 +94,11 @@ def final_quantities(row: dict[str, Any], gauges: Sequence[float]) -> dict[str, 
     return {k: v for k, v in out.items() if v is not None and math.isfinite(v)}
 
 
-def _by_name(rows: Sequence[dict[str, Any]]) -> dict[str, dict[str, Any]]:
+def _by_name(rows: Sequence[BatchRow]) -> dict[str, BatchRow]:
     return {r["name"]: r for r in rows}
 
 
-def size_results(info: StudyInfo, rows: Sequence[dict[str, Any]]
+def size_results(info: StudyInfo, rows: Sequence[BatchRow]
                  ) -> list[tuple[StudyCase, dict[str, Any], dict[str, float]]]:
     """The complete size cases (coarse to fine) with their rows and final quantities."""
     by = _by_name(rows)
@@ -148,7 +147,7 @@ def _status(h: float, info: StudyInfo, by: dict[str, dict[str, Any]]) -> tuple[s
     return row["status"], row
 
 
-def size_table(info: StudyInfo, rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
+def size_table(info: StudyInfo, rows: Sequence[BatchRow]) -> list[SizeRow]:
     """Per size (the paper's and ours, coarse to fine): the paper's Table 2 and our numbers."""
     by = _by_name(rows)
     sizes = sorted(set(PAPER_ELEMENTS) | {c.h for c in info.checks}, reverse=True)
@@ -167,7 +166,7 @@ def size_table(info: StudyInfo, rows: Sequence[dict[str, Any]]) -> list[dict[str
     return out
 
 
-def table_csv(table: list[dict[str, Any]]) -> str:
+def table_csv(table: list[SizeRow]) -> str:
     """``mesh_study.csv``: :func:`size_table` as CSV."""
     buf = io.StringIO()
     w = csv.DictWriter(buf, fieldnames=list(table[0]), lineterminator="\n")
@@ -177,7 +176,7 @@ def table_csv(table: list[dict[str, Any]]) -> str:
     return buf.getvalue()
 
 
-def penalty_check(info: StudyInfo, rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
+def penalty_check(info: StudyInfo, rows: Sequence[BatchRow]) -> list[PenaltyRow]:
     """Per penalty case: the relative change of each final quantity against the base size."""
     by = _by_name(rows)
     gauges = info.scenario.outputs.gauge_depths_m
@@ -284,7 +283,7 @@ def profiles_figure(done: Sequence[tuple[StudyCase, dict[str, Any], dict[str, fl
     return fig
 
 
-def write_mesh_report(out: Path, info: StudyInfo, rows: Sequence[dict[str, Any]]) -> list[Path]:
+def write_mesh_report(out: Path, info: StudyInfo, rows: Sequence[BatchRow]) -> list[Path]:
     """Write the report files into ``out``; returns their paths."""
     out.mkdir(parents=True, exist_ok=True)
     done = size_results(info, rows)

@@ -4,13 +4,11 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from pilegroup.studies.campaigns.gci import GCIResult, gci
+from pilegroup.studies.campaigns.mesh_records import StudyInfo
 from pilegroup.studies.report.paper_values import PAPER_SETTLEMENT_CM
-
-if TYPE_CHECKING:  # the study imports the report
-    from pilegroup.studies.campaigns.mesh_study import StudyInfo
 
 #: Relative change (of the value) above which the answer is said to depend on the penalty.
 PENALTY_TOL = 0.01

@@ -23,18 +23,19 @@ from __future__ import annotations
 import math
 import os
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from mpi4py import MPI
 
 from pilegroup.errors import ScenarioError
-from pilegroup.geometry.adapter import geometry_spec
+from pilegroup.geometry.adapter import resolve_geometry
 from pilegroup.model import Scenario, load_scenario
 from pilegroup.model.mesh_estimate import estimated_cells
 from pilegroup.studies.batch.batch_plan import BatchCase, BatchPlan
 from pilegroup.studies.batch.execute import run_batch
+from pilegroup.studies.batch.rows import BatchRow
+from pilegroup.studies.campaigns.mesh_records import SizeCheck, StudyCase, StudyInfo
 from pilegroup.studies.campaigns.mesh_report import write_mesh_report
 from pilegroup.studies.report.paper_values import PAPER_HOURS
 
@@ -59,40 +60,6 @@ VERTICES_PER_CELL = 1.15
 UNKNOWNS_PER_VERTEX = {"Q1Q1": 4, "Q2Q1": 25}
 
 
-@dataclass(frozen=True)
-class SizeCheck:
-    """One mesh size: whether it can run here, why not, and the estimates behind it."""
-
-    h: float
-    runnable: bool
-    reason: str = ""
-    estimated_cells: float = math.nan
-    estimated_unknowns: float = math.nan
-    estimated_memory_mb: float = math.nan
-
-
-@dataclass(frozen=True)
-class StudyCase:
-    """A case of the study: its name, mesh size and penalty multiplier (1 = as given)."""
-
-    name: str
-    h: float
-    penalty: float = 1.0
-
-
-@dataclass(frozen=True)
-class StudyInfo:
-    """What the report states besides the rows: scenario, sizes, cases, ranks, memory."""
-
-    scenario: Scenario
-    checks: tuple[SizeCheck, ...]
-    cases: tuple[StudyCase, ...]
-    ranks: int
-    ranks_per_case: int
-    memory_mb: float
-    penalty_factor: float
-
-
 def machine_memory_mb() -> float:
     """Physical memory of this machine, MB."""
     return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES") / 2 ** 20
@@ -100,7 +67,7 @@ def machine_memory_mb() -> float:
 
 def estimated_unknowns(sc: Scenario) -> float:
     """Unknowns of ``sc``'s model from the (conservative) cell-count estimate."""
-    kept = 0.5 ** len(geometry_spec(sc).cut_planes())
+    kept = resolve_geometry(sc).kept_fraction
     per_vertex = UNKNOWNS_PER_VERTEX.get(sc.numerics.element, 25)
     return estimated_cells(sc) * kept * VERTICES_PER_CELL * per_vertex
 
@@ -166,7 +133,7 @@ def run_mesh_study(source: str, sets: Mapping[str, Any], sizes: Sequence[float],
               for h in dict.fromkeys(sizes)]
     cases = study_cases(sc, checks, penalty_factor)
     failed = 0
-    rows: list[dict[str, Any]] = []
+    rows: list[BatchRow] = []
     if cases:
         result = run_batch(study_plan(source, sets, sc, cases), out, ranks_per_case, comm,
                            progress)

@@ -9,10 +9,10 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
-from typing import Any
 
 from pilegroup.errors import ScenarioError
 from pilegroup.model.loader import parse_override
+from pilegroup.studies.batch.rows import BatchRow
 from pilegroup.studies.report.paper_values import PAPER_HOURS
 
 EXIT_INPUT = 2
@@ -47,7 +47,7 @@ def _input_error_once(exc: ScenarioError) -> int:
     return EXIT_INPUT
 
 
-def _print_rows(rows: list[dict[str, Any]]) -> None:
+def _print_rows(rows: list[BatchRow]) -> None:
     for r in rows:
         wall = "" if r.get("wall_s") is None else f" {r['wall_s']:.1f} s"
         why = f": {r['message']}" if r["status"] == "failed" else ""

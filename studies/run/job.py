@@ -12,12 +12,12 @@ from mpi4py import MPI
 
 from pilegroup.errors import PilegroupError, RunInterrupted, ScenarioError
 from pilegroup.fileio import write_json_atomic
-from pilegroup.geometry.adapter import geometry_spec
+from pilegroup.geometry.adapter import ResolvedGeometry, resolve_geometry
 from pilegroup.geometry.convert import build_mesh
 from pilegroup.geometry.output import mesh_outputs
-from pilegroup.geometry.spec import GeometrySpec
 from pilegroup.model import Scenario
 from pilegroup.studies.report.run_report import write_report
+from pilegroup.studies.results.records import JobSummary, write_job_summary
 from pilegroup.studies.run.checkpoint import check_resume, completed_summary, remove_checkpoint
 from pilegroup.studies.run.pipeline import run_coupled
 
@@ -26,7 +26,7 @@ log = logging.getLogger(__name__)
 
 def run_scenario(sc: Scenario, out: Path, mesh_size: float | None = None,
                  stop_after: str = "solve", comm: MPI.Comm = MPI.COMM_WORLD,
-                 resume: bool = False) -> dict[str, Any]:
+                 resume: bool = False) -> JobSummary:
     """Run scenario ``sc`` on ``comm`` and write its outputs to ``out``; returns the summary.
 
     Validate, write the resolved scenario (``scenario.json``), build the mesh once and write
@@ -60,9 +60,9 @@ def run_scenario(sc: Scenario, out: Path, mesh_size: float | None = None,
         write_json_atomic(out / "scenario.json", sc)
         if manifest is None:
             remove_checkpoint(out)
-    spec = geometry_spec(sc)
+    geo = resolve_geometry(sc)  # the one resolution of the scenario's geometry in a run
     try:
-        summary = _run(sc, spec, out, stop_after, comm, t0, manifest)
+        summary = _run(sc, geo, out, stop_after, comm, t0, manifest)
     except RunInterrupted as exc:
         _write_interrupted(out, sc, comm, exc, t0)
         raise
@@ -77,14 +77,14 @@ def run_scenario(sc: Scenario, out: Path, mesh_size: float | None = None,
     return summary
 
 
-def _run(sc: Scenario, spec: GeometrySpec, out: Path, stop_after: str, comm: MPI.Comm,
-         t0: float, resume: dict[str, Any] | None) -> dict[str, Any]:
+def _run(sc: Scenario, geo: ResolvedGeometry, out: Path, stop_after: str, comm: MPI.Comm,
+         t0: float, resume: dict[str, Any] | None) -> JobSummary:
     """Mesh and solve; writes ``summary.json`` with ``status = "complete"``."""
     t_mesh = time.perf_counter()
-    md = build_mesh(spec, comm)
-    mesh = mesh_outputs(md, spec, out / "mesh", t0=t_mesh)
-    solved = run_coupled(sc, md, out, resume=resume) if stop_after == "solve" else None
-    summary: dict[str, Any] = {
+    md = build_mesh(geo.spec, comm)
+    mesh = mesh_outputs(md, geo.spec, out / "mesh", t0=t_mesh)
+    solved = run_coupled(sc, geo, md, out, resume=resume) if stop_after == "solve" else None
+    summary: JobSummary = {
         "scenario": sc.name,
         "status": "complete",
         "stages_done": ["validate", "mesh"] + ([st.name for st in sc.stages] if solved else []),
@@ -95,8 +95,7 @@ def _run(sc: Scenario, spec: GeometrySpec, out: Path, stop_after: str, comm: MPI
         "wall_s": time.perf_counter() - t0,
     }
     if comm.rank == 0:
-        write_json_atomic(out / "summary.json", summary)
-        log.info("wrote %s", out / "summary.json")
+        log.info("wrote %s", write_job_summary(out, summary))
     return summary
 
 
@@ -113,7 +112,7 @@ def _write_interrupted(out: Path, sc: Scenario, comm: MPI.Comm, exc: RunInterrup
                        t0: float) -> None:
     """``summary.json`` with ``status = "interrupted"``: the signal, time reached, checkpoint."""
     if comm.rank == 0:
-        write_json_atomic(out / "summary.json", {
+        write_job_summary(out, {
             "scenario": sc.name, "status": "interrupted", "signal": exc.signal_name,
             "t_day": exc.t, "stage": exc.stage, "checkpoint": exc.checkpoint,
             "resume": "pilegroup run SCENARIO --out OUT --resume (same scenario, --set "
@@ -132,7 +131,7 @@ def _write_failure(out: Path, sc: Scenario, comm: MPI.Comm, exc: BaseException,
     collective = isinstance(exc, PilegroupError)
     if collective and comm.rank != 0:
         return
-    write_json_atomic(out / "summary.json", {
+    write_job_summary(out, {
         "scenario": sc.name, "status": "failed",
         "reason": f"{type(exc).__name__}: {exc}",
         "rank": None if collective else comm.rank, "ranks": comm.size,

@@ -44,7 +44,7 @@ from mpi4py import MPI
 
 from pilegroup.fileio import write_text_atomic
 from pilegroup.geometry import groups
-from pilegroup.geometry.adapter import geometry_spec
+from pilegroup.geometry.adapter import ResolvedGeometry
 from pilegroup.model import Scenario
 from pilegroup.solver import BiotProblem
 from pilegroup.solver.probes import SettlementProbe
@@ -69,18 +69,19 @@ class PileProbe:
 
     Args:
         sc: the scenario (pile positions, diameter, layers).
+        geo: its resolved geometry (which piles the mesh holds, and in which fraction).
         pb: the :class:`~pilegroup.solver.problem.BiotProblem`.
         out: output folder for the CSV files.
     """
 
-    def __init__(self, sc: Scenario, pb: BiotProblem, out: Path) -> None:
+    def __init__(self, sc: Scenario, geo: ResolvedGeometry, pb: BiotProblem, out: Path) -> None:
         self.sc, self.pb, self.out = sc, pb, Path(out)
         self.comm = pb.comm
         self.xy = np.array(sc.piles.xy, dtype=float)
         self.d = sc.piles.diameter_m
         # every pile of the foundation from its mirror image in a symmetry-reduced mesh, whose
         # cut piles carry their meshed fraction of the load
-        spec = geometry_spec(sc)
+        spec = geo.spec
         self.source = spec.mirror_of()
         self.fraction = {i: spec.pile_fraction(i) for i in spec.kept_piles()}
         c = self.xy.mean(axis=0)

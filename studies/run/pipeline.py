@@ -25,7 +25,7 @@ from pilegroup.constitutive.interface_law import PileSoilInterface
 from pilegroup.constitutive.soil import DruckerPrager, LinearElastic, MohrCoulomb
 from pilegroup.errors import StepFailure
 from pilegroup.geometry import groups
-from pilegroup.geometry.adapter import geometry_spec, resolve_symmetry
+from pilegroup.geometry.adapter import ResolvedGeometry
 from pilegroup.geometry.meshdata import MeshData
 from pilegroup.geometry.symmetry import PLANES
 from pilegroup.model import Scenario, ScenarioError
@@ -50,6 +50,7 @@ from pilegroup.solver import (
     run_summary,
 )
 from pilegroup.solver.probes import facet_area
+from pilegroup.studies.results.records import SOLVER_SUMMARY_JSON, RunSummary
 from pilegroup.studies.results.tables import GAUGES_CSV
 from pilegroup.studies.run.checkpoint import Checkpoints
 from pilegroup.studies.run.gauge_probe import GaugeProbe
@@ -108,9 +109,12 @@ def soil_law(sc: Scenario, j: int) -> LinearElastic | MohrCoulomb | DruckerPrage
     return cls(lay.E, lay.nu, lay.c_kPa, lay.phi_deg, lay.psi_deg)
 
 
-def build_problem(sc: Scenario, md: MeshData, preset: str | None = None,
-                  mesh_size: float | None = None) -> BiotProblem:
-    """The :class:`~pilegroup.solver.problem.BiotProblem` of scenario ``sc`` on mesh ``md``."""
+def build_problem(sc: Scenario, geo: ResolvedGeometry, md: MeshData, preset: str | None = None
+                  ) -> BiotProblem:
+    """The :class:`~pilegroup.solver.problem.BiotProblem` of scenario ``sc`` on mesh ``md``.
+
+    ``geo`` is the scenario's resolved geometry (the part of the model ``md`` holds).
+    """
     if sc.site.water_table_depth_m != 0.0:
         raise ScenarioError("site.water_table_depth_m", sc.site.water_table_depth_m,
                             "only 0 (water table at the ground surface) is supported so far", "m")
@@ -129,15 +133,14 @@ def build_problem(sc: Scenario, md: MeshData, preset: str | None = None,
     dbcs = [DisplacementBC(f, c) for f, c in rollers if f in md.facet_names]
     dbcs += [DisplacementBC(groups.BOTTOM, c) for c in range(3)]
     names = load_facets(sc, md)
-    loads = [SurfaceLoad(f, sc.total_cap_load() / full_load_area(sc, md, mesh_size))
-             for f in names]
+    loads = [SurfaceLoad(f, sc.total_cap_load() / full_load_area(sc, geo, md)) for f in names]
     disc = Discretisation(sc.numerics.element)
     p = preset or sc.numerics.solver.preset
     if p == "auto":
         p = auto_preset(estimate_dofs(md, sc.numerics.element))
     num = sc.numerics
     newton = NewtonOptions(rtol=num.newton_rtol, atol=num.newton_atol, max_it=num.time.max_newton)
-    h = mesh_size or num.mesh.size_m
+    h = geo.spec.sizing.h_pile
     opts = SolverOptions(preset=p, overrides=dict(num.solver.options), newton=newton,
                          band_layers=band_layers(h))
     return BiotProblem(md, materials, disc, displacement_bcs=dbcs,
@@ -145,7 +148,7 @@ def build_problem(sc: Scenario, md: MeshData, preset: str | None = None,
                        interface=interface_coupling(sc, h))
 
 
-def full_load_area(sc: Scenario, md: MeshData, mesh_size: float | None = None) -> float:
+def full_load_area(sc: Scenario, geo: ResolvedGeometry, md: MeshData) -> float:
     """Area (m^2) of the loaded top of the whole foundation (cap top, or every pile head).
 
     With a cap, its plan area. Without one, the meshed pile heads (polygons slightly smaller
@@ -155,8 +158,7 @@ def full_load_area(sc: Scenario, md: MeshData, mesh_size: float | None = None) -
     """
     if sc.cap is not None:
         return sc.cap.size_x_m * sc.cap.size_y_m
-    held = 0.5 ** len(geometry_spec(sc, mesh_size).cut_planes())
-    return facet_area(md, load_facets(sc, md)) / held
+    return facet_area(md, load_facets(sc, md)) / geo.kept_fraction
 
 
 def interface_law(sc: Scenario, j: int, mesh_size: float) -> PileSoilInterface | None:
@@ -177,16 +179,17 @@ def interface_law(sc: Scenario, j: int, mesh_size: float) -> PileSoilInterface |
         viscous=opt.mode == "viscoplastic")
 
 
-def interface_coupling(sc: Scenario, mesh_size: float | None = None
-                       ) -> InterfaceCoupling | None:
-    """Separate pile/soil fields joined by the interface law, or ``None`` (``tied``)."""
+def interface_coupling(sc: Scenario, mesh_size: float) -> InterfaceCoupling | None:
+    """Separate pile/soil fields joined by the interface law, or ``None`` (``tied``).
+
+    ``mesh_size``: the element size h (m) at the pile surfaces (the normal penalty's scale).
+    """
     if sc.interface.mode == "tied":
         return None
     if not sc.interface.base:
         raise ScenarioError("interface.base", False, "only true (a pile base interface) is "
                             "supported with interface.mode = elastic/viscoplastic", "-")
-    h = mesh_size or sc.numerics.mesh.size_m
-    laws = tuple(interface_law(sc, j, h) for j in range(len(sc.layers)))
+    laws = tuple(interface_law(sc, j, mesh_size) for j in range(len(sc.layers)))
     return InterfaceCoupling(laws + laws, quadrature=sc.interface.quadrature)
 
 
@@ -237,10 +240,12 @@ def xdmf_label(symmetry: str) -> str | None:
     return f"{symmetry}_model_{part}_reflect_about_" + "_and_".join(f"{a}0" for a in planes)
 
 
-def run_coupled(sc: Scenario, md: MeshData, out: Path, preset: str | None = None,
-                mesh_size: float | None = None, resume: dict[str, Any] | None = None
-                ) -> dict[str, Any]:
+def run_coupled(sc: Scenario, geo: ResolvedGeometry, md: MeshData, out: Path,
+                preset: str | None = None, resume: dict[str, Any] | None = None
+                ) -> RunSummary:
     """Run every stage of ``sc`` on ``md`` with the scenario's exports; returns the summary.
+
+    ``geo``: the scenario's resolved geometry, of which ``md`` is the mesh.
 
     Exports, written at every output time: ``settlement.csv``, the pile tables
     (:class:`~pilegroup.studies.run.pile_probe.PileProbe`), ``gauges.csv`` (when the scenario has
@@ -254,16 +259,15 @@ def run_coupled(sc: Scenario, md: MeshData, out: Path, preset: str | None = None
     continue from (:func:`~pilegroup.studies.run.checkpoint.check_resume`).
     """
     t0 = time.perf_counter()
-    symmetry = resolve_symmetry(sc)
-    pb = build_problem(sc, md, preset, mesh_size)
+    pb = build_problem(sc, geo, md, preset)
     settlement = SettlementSeries(pb, load_facets(sc, md), out / "settlement.csv")
-    piles = PileProbe(sc, pb, out)
+    piles = PileProbe(sc, geo, pb, out)
     gauges = GaugeProbe(sc, pb, piles, out / GAUGES_CSV) if sc.outputs.gauge_depths_m else None
 
-    def summary(complete: bool) -> dict[str, Any]:
+    def summary(complete: bool) -> RunSummary:
         return {"complete": complete, "dofs": pb.num_dofs, "centre_pile": piles.centre,
                 "interface_mode": sc.interface.mode,
-                "symmetry": {"model": symmetry[0], "reason": symmetry[1]},
+                "symmetry": {"model": geo.symmetry, "reason": geo.reason},
                 "element": sc.numerics.element, "preset": pb.linear_solver.preset,
                 "gauge_sections": gauges.summary() if gauges is not None else None,
                 "settlement_m": [{"t_day": t, "stage": s, "settlement_m": w}
@@ -272,14 +276,14 @@ def run_coupled(sc: Scenario, md: MeshData, out: Path, preset: str | None = None
                 "resumed_from_day": resume["t_day"] if resume is not None else None,
                 "checkpoints": ckpt.written, "wall_s": time.perf_counter() - t0}
 
-    writer = SummaryWriter(out / "summary_solver.json", pb.comm, summary)
+    writer = SummaryWriter(out / SOLVER_SUMMARY_JSON, pb.comm, summary)
     curve = LoadSettlementCurve(pb, settlement.probe, sc.total_cap_load(),
                                 out / "load_settlement.csv")
     exports: list[Export] = [settlement, piles, curve]
     if gauges is not None:
         exports.append(gauges)
     if sc.outputs.xdmf:
-        exports.append(XDMFSeries(pb, out / "results.xdmf", xdmf_label(symmetry[0]),
+        exports.append(XDMFSeries(pb, out / "results.xdmf", xdmf_label(geo.symmetry),
                                   resume=resume is not None))
     exports.append(writer)
     stages = solver_stages(sc)

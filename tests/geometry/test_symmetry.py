@@ -23,7 +23,7 @@ from mpi4py import MPI
 from pilegroup.errors import ScenarioError
 from pilegroup.geometry import groups
 from pilegroup.geometry import spec as gs
-from pilegroup.geometry.adapter import geometry_spec, resolve_symmetry
+from pilegroup.geometry.adapter import geometry_spec, resolve_geometry
 from pilegroup.geometry.convert import build_mesh
 from pilegroup.geometry.plan import circumferential_divisions
 from pilegroup.model import load_scenario
@@ -286,22 +286,22 @@ def _with_positions(sc, xy):
 def test_auto_resolves_pier_to_quarter_and_eccentric_to_none():
     sc = load_scenario("pier667")
     assert sc.numerics.symmetry == "auto"
-    mode, reason = resolve_symmetry(sc)
+    mode, reason = resolve_geometry(sc).symmetry, resolve_geometry(sc).reason
     assert mode == "quarter" and "x = 0 and y = 0" in reason
     assert geometry_spec(sc).symmetry == "quarter"
     eccentric = _with_positions(sc, [(x + 0.4 * (y > 0), y) for x, y in sc.piles.xy])
-    mode, reason = resolve_symmetry(eccentric)
+    mode, reason = resolve_geometry(eccentric).symmetry, resolve_geometry(eccentric).reason
     assert mode == "none" and "x = 0" in reason and "y = 0" in reason
     assert geometry_spec(eccentric).symmetry == "none"
     rows = _with_positions(sc, [(x, y) for x, y in sc.piles.xy if y < 2])  # 2 rows: x only
-    assert resolve_symmetry(rows)[0] == "half_x"
+    assert resolve_geometry(rows).symmetry == "half_x"
 
 
 def test_explicit_symmetry_is_checked_against_the_scene():
     sc = load_scenario("pier667")
     for mode in ("none", "half_x", "half_y", "quarter"):
         one = dataclasses.replace(sc, numerics=dataclasses.replace(sc.numerics, symmetry=mode))
-        assert resolve_symmetry(one)[0] == mode == geometry_spec(one).symmetry
+        assert resolve_geometry(one).symmetry == mode == geometry_spec(one).symmetry
     rows = _with_positions(sc, [(x, y) for x, y in sc.piles.xy if y < 2])
     bad = dataclasses.replace(rows, numerics=dataclasses.replace(rows.numerics,
                                                                  symmetry="half_y"))

@@ -132,7 +132,7 @@ def test_interface_quadrature_reaches_the_solver_coupling():
     d["interface"]["quadrature"] = "gauss"
     sc = scenario_from_dict(d)
     assert sc.interface.quadrature == "gauss"
-    assert interface_coupling(sc).quadrature == "gauss"
+    assert interface_coupling(sc, sc.numerics.mesh.size_m).quadrature == "gauss"
 
 
 def test_bundled_pier667_matches_paper():

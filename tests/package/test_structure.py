@@ -1,9 +1,12 @@
 """The package's structure: one-way imports without circles, small modules and functions.
 
-Read from the source with ``ast`` (nothing is imported): every ``pilegroup.*`` import at run
-time (imports under ``if TYPE_CHECKING:`` are for annotations only) is an edge between modules.
-Limits (docs/architecture.md): modules up to 500 lines and functions up to 80 lines, unless the
-module docstring says why (a line starting ``Size:``).
+Read from the source with ``ast`` (nothing is imported): every ``pilegroup.*`` import is an edge
+between modules. No circle, type-only imports (under ``if TYPE_CHECKING:``) included: a type two
+modules need lives below both. The layering of data (model -> geometry -> solver -> studies)
+holds for the imports at run time. Limits (docs/architecture.md): modules up to 500 lines and
+functions up to 80 lines, unless the module docstring says why (a line starting ``Size:``).
+The step protocol (:mod:`pilegroup.solver.step_protocol`) is the only way Newton, the stepper
+and the constraints use a problem, and no module reads another object's private attributes.
 """
 
 import ast
@@ -43,11 +46,11 @@ def _is_type_checking(node: ast.If) -> bool:
         isinstance(t, ast.Attribute) and t.attr == "TYPE_CHECKING")
 
 
-def _imports(tree: ast.AST, known: set[str]) -> set[str]:
+def _imports(tree: ast.AST, known: set[str], type_only: bool = False) -> set[str]:
     found: set[str] = set()
 
     def visit(node: ast.AST) -> None:
-        if isinstance(node, ast.If) and _is_type_checking(node):
+        if isinstance(node, ast.If) and _is_type_checking(node) and not type_only:
             for child in node.orelse:
                 visit(child)
             return
@@ -69,6 +72,9 @@ def _layer(module: str) -> int:
 
 GRAPH = {m: _imports(ast.parse(p.read_text()), set(_modules()))
          for m, p in _modules().items()}
+#: Every import, type-only ones included.
+ALL_IMPORTS = {m: _imports(ast.parse(p.read_text()), set(_modules()), type_only=True)
+               for m, p in _modules().items()}
 
 
 def test_no_import_circle():
@@ -76,7 +82,7 @@ def test_no_import_circle():
 
     def walk(m: str, stack: list[str]) -> None:
         state[m] = 1
-        for n in sorted(GRAPH[m]):
+        for n in sorted(ALL_IMPORTS[m]):
             if n == m or n.startswith(m + "."):
                 continue  # a package importing its own modules
             assert state.get(n) != 1, "import circle: " + " -> ".join([*stack, m, n])
@@ -84,7 +90,7 @@ def test_no_import_circle():
                 walk(n, [*stack, m])
         state[m] = 2
 
-    for m in sorted(GRAPH):
+    for m in sorted(ALL_IMPORTS):
         if m not in state:
             walk(m, [])
 
@@ -126,3 +132,58 @@ def test_class_names_are_unique():
             if isinstance(node, ast.ClassDef):
                 seen.setdefault(node.name, []).append(m)
     assert not {k: v for k, v in seen.items() if len(v) > 1}
+
+
+def _private_reads(tree: ast.AST) -> list[str]:
+    """``obj._name`` where ``obj`` is not ``self``/``cls`` (dunder names allowed)."""
+    out = []
+    for node in ast.walk(tree):
+        if (isinstance(node, ast.Attribute) and node.attr.startswith("_")
+                and not node.attr.startswith("__")):
+            owner = node.value
+            if not (isinstance(owner, ast.Name) and owner.id in ("self", "cls")):
+                out.append(f"line {node.lineno}: {ast.unparse(node)}")
+    return out
+
+
+@pytest.mark.parametrize("module", sorted(_modules()))
+def test_no_private_attribute_of_another_object(module):
+    assert not _private_reads(ast.parse(_modules()[module].read_text())), module
+
+
+def _protocol_members() -> set[str]:
+    tree = ast.parse((ROOT / "solver" / "step_protocol.py").read_text())
+    cls = next(n for n in tree.body if isinstance(n, ast.ClassDef) and n.name == "StepProblem")
+    return {n.name for n in cls.body if isinstance(n, ast.FunctionDef)}
+
+
+def _problem_uses(tree: ast.AST) -> set[str]:
+    """Attributes read on ``pb``, ``problem`` or ``self.problem``."""
+    out = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Attribute):
+            v = node.value
+            if (isinstance(v, ast.Name) and v.id in ("pb", "problem")) or (
+                    isinstance(v, ast.Attribute) and v.attr == "problem"
+                    and isinstance(v.value, ast.Name) and v.value.id == "self"):
+                out.add(node.attr)
+    return out
+
+
+@pytest.mark.parametrize("name", ["newton", "stepping", "constraints"])
+def test_solver_drivers_use_the_step_protocol_only(name):
+    members = _protocol_members()
+    assert {"solve_step", "set_step", "residual_state"} <= members
+    used = _problem_uses(ast.parse((ROOT / "solver" / f"{name}.py").read_text()))
+    assert used, name  # the check reads the driver's uses of the problem
+    assert used <= members, sorted(used - members)
+
+
+def test_every_module_is_in_the_architecture_document():
+    """docs/architecture.md names every module (in backticks) with what it owns."""
+    text = (ROOT / "docs" / "architecture.md").read_text()
+    missing = sorted(str(p.relative_to(ROOT)) for p in _modules().values()
+                     if p.stem != "__init__" and f"`{p.stem}`" not in text)
+    subpackages = sorted(str(p.parent.relative_to(ROOT)) for p in _modules().values()
+                         if p.stem == "__init__" and f"`{p.parent.name}`" not in text)
+    assert not missing and not subpackages, (missing, subpackages)

@@ -6,7 +6,7 @@ import dataclasses
 import pytest
 from mpi4py import MPI
 
-from pilegroup.geometry.adapter import geometry_spec
+from pilegroup.geometry.adapter import geometry_spec, resolve_geometry
 from pilegroup.geometry.convert import build_mesh
 from pilegroup.model import load_scenario
 from pilegroup.solver.probes import SettlementProbe
@@ -22,7 +22,7 @@ def test_direct_reuse_matches_direct(tmp_path, monkeypatch, mode, small_pile):
     md = build_mesh(geometry_spec(sc), MPI.COMM_WORLD)
     out = {}
     for preset in ("direct", "direct_reuse"):
-        pb = pier.build_problem(sc, md, preset)
+        pb = pier.build_problem(sc, resolve_geometry(sc), md, preset)
         probe = SettlementProbe(pb, pier.load_facets(sc, md))
         log = run_stages(pb, pier.solver_stages(sc), pier.time_stepping(sc),
                          geostatic_tol=pier.GEOSTATIC_TOL_M)

@@ -13,7 +13,7 @@ import pytest
 from mpi4py import MPI
 
 from pilegroup.errors import ScenarioError, SolverInputError
-from pilegroup.geometry.adapter import geometry_spec
+from pilegroup.geometry.adapter import geometry_spec, resolve_geometry
 from pilegroup.geometry.convert import build_mesh
 from pilegroup.model import load_scenario
 from pilegroup.solver.inputs import SolverOptions
@@ -26,7 +26,7 @@ def _run(sc, md, preset, options=None):
     """Settlement (m), run log and problem of the scenario's stages with ``preset``."""
     solver = dataclasses.replace(sc.numerics.solver, options=dict(options or {}))
     sc = dataclasses.replace(sc, numerics=dataclasses.replace(sc.numerics, solver=solver))
-    pb = pier.build_problem(sc, md, preset)
+    pb = pier.build_problem(sc, resolve_geometry(sc), md, preset)
     probe = SettlementProbe(pb, pier.load_facets(sc, md))
     log = run_stages(pb, pier.solver_stages(sc), pier.time_stepping(sc),
                      geostatic_tol=pier.GEOSTATIC_TOL_M)
@@ -61,7 +61,7 @@ def test_interface_index_set_is_the_interface_nodes(small):
     interface integrates its nodal weights, on every rank count; without a band the two
     displacement splits partition the displacement rows."""
     sc, md = small
-    pb = pier.build_problem(sc, md)
+    pb = pier.build_problem(sc, resolve_geometry(sc), md)
     lay, comm = pb.layout, md.mesh.comm
     imap = lay.body("soil").V.dofmap.index_map
     mine = imap.local_to_global(lay.interface_soil_nodes())
@@ -85,7 +85,7 @@ def test_interface_index_set_band_is_the_cell_layers_around_the_interface(small,
     over the gathered global cell-node lists); the structure block holds it and the soil block
     keeps it (the blocks overlap there, and only there)."""
     sc, md = small
-    pb = pier.build_problem(sc, md)
+    pb = pier.build_problem(sc, resolve_geometry(sc), md)
     lay, comm = pb.layout, md.mesh.comm
     V = lay.body("soil").V
     imap = V.dofmap.index_map
@@ -115,7 +115,7 @@ def test_the_band_keeps_its_width_at_every_mesh_size(small):
     extra layer from round-off at h = 0.3 m); a negative count is refused."""
     sc, md = small
     assert [pier.band_layers(h) for h in (2.0, 1.0, 0.8, 0.6, 0.3, 0.1)] == [1, 2, 3, 4, 7, 20]
-    pb = pier.build_problem(sc, md)
+    pb = pier.build_problem(sc, resolve_geometry(sc), md)
     assert pb.options.band_layers == pier.band_layers(sc.numerics.mesh.size_m)
     with pytest.raises(SolverInputError, match="band_layers = -1"):
         SolverOptions(band_layers=-1)

@@ -82,7 +82,7 @@ def test_weights_frames_and_jump(degree):
     assert _owned_sum(itf.W[:, 0], Vs) == pytest.approx(0.5, rel=1e-12)
     assert _owned_sum(itf.W[:, 1], Vs) == pytest.approx(0.5, rel=1e-12)
     for g in itf.groups[:2]:
-        np.testing.assert_allclose(g["R"][:, 0], np.tile([1.0, 0, 0], (len(g["nodes"]), 1)),
+        np.testing.assert_allclose(g.R[:, 0], np.tile([1.0, 0, 0], (len(g.nodes), 1)),
                                    atol=1e-12)
     # jump of linear fields is exact at the nodes
     up, us = fem.Function(Vp), fem.Function(Vs)

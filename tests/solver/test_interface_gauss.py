@@ -131,7 +131,7 @@ def test_gauss_points_weights_and_nodal_output():
     for m in (0, 1):
         p = itf.material_points(m)
         assert np.all((p["x"][:, 2] < 0.5) == (m == 0))  # layer groups by the soil cell
-        np.testing.assert_allclose(itf.groups[m]["R"][:, 0], np.tile([1.0, 0, 0],
+        np.testing.assert_allclose(itf.groups[m].R[:, 0], np.tile([1.0, 0, 0],
                                                                       (len(p["x"]), 1)),
                                    atol=1e-12)
         np.testing.assert_allclose(p["state"]["traction"], _traction0(p["x"][:, 2], m))

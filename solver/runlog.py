@@ -1,0 +1,38 @@
+"""What the stepper did: the accepted steps and the rejected attempts of a run.
+
+Data only, below the stepper (:mod:`pilegroup.solver.stepping`, which writes it) and the exports
+(:mod:`pilegroup.solver.exports`, whose run summary reads it).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+
+@dataclass
+class StepRecord:
+    """One accepted step."""
+
+    stage: str
+    t: float
+    dt: float
+    load_factor: float
+    newton_its: int
+    ksp_its: int
+    seconds: float
+    ksp_max: int = 0  # Krylov iterations of the step's hardest Newton solve
+
+
+@dataclass
+class RunLog:
+    """Everything the stepper did: accepted steps and rejected attempts."""
+
+    steps: list[StepRecord] = field(default_factory=list)
+    rejected: int = 0
+    geostatic_max_u: float | None = None
+    wall_s: float = 0.0
+
+    @property
+    def newton_total(self) -> int:
+        """Newton iterations of the accepted steps."""
+        return sum(s.newton_its for s in self.steps)
