@@ -28,8 +28,9 @@ from pilegroup.geometry import groups
 from pilegroup.geometry.adapter import geometry_spec, resolve_symmetry
 from pilegroup.geometry.meshdata import MeshData
 from pilegroup.geometry.symmetry import PLANES
-from pilegroup.model import Scenario, ScenarioError
+from pilegroup.model import Scenario, ScenarioError, Stage
 from pilegroup.solver import (
+    GAMMA_W,
     BiotProblem,
     Discretisation,
     DisplacementBC,
@@ -117,7 +118,8 @@ def build_problem(sc: Scenario, md: MeshData, preset: str | None = None,
     materials: dict[str, SoilMaterial | ElasticSolid] = {}
     for j, lay in enumerate(sc.layers):
         materials[groups.soil_layer(j + 1)] = SoilMaterial(
-            soil_law(sc, j), lay.k_m_per_day, lay.porosity, lay.gamma_kN_per_m3, K0=lay.K0)
+            soil_law(sc, j), lay.k_m_per_day, lay.porosity, lay.gamma_kN_per_m3, K0=lay.K0,
+            excess_ratio=lay.excess_pore_pressure_ratio, excess_kPa=lay.excess_pore_pressure_kPa)
     solid = ElasticSolid(sc.structure.E, sc.structure.nu)
     for name in md.cell_names:
         if groups.is_structure(name):
@@ -130,7 +132,7 @@ def build_problem(sc: Scenario, md: MeshData, preset: str | None = None,
     dbcs += [DisplacementBC(groups.BOTTOM, c) for c in range(3)]
     names = load_facets(sc, md)
     loads = [SurfaceLoad(f, sc.total_cap_load() / full_load_area(sc, md, mesh_size))
-             for f in names]
+             for f in names] + surcharge_loads(sc)
     disc = Discretisation(sc.numerics.element)
     p = preset or sc.numerics.solver.preset
     if p == "auto":
@@ -141,8 +143,42 @@ def build_problem(sc: Scenario, md: MeshData, preset: str | None = None,
     opts = SolverOptions(preset=p, overrides=dict(num.solver.options), newton=newton,
                          band_layers=band_layers(h))
     return BiotProblem(md, materials, disc, displacement_bcs=dbcs,
-                       pressure_bcs=[PressureBC(groups.GROUND)], loads=loads, options=opts,
+                       pressure_bcs=[ground_drainage(sc)], loads=loads, options=opts,
                        interface=interface_coupling(sc, h))
+
+
+def ground_actions(sc: Scenario) -> list[Stage]:
+    """The surcharge stages, in order: ground action ``i`` is the ``i``-th of them.
+
+    Every groundwater stage moves one more action, the water table's (the last one).
+    """
+    return [st for st in sc.stages if st.kind == "surcharge"]
+
+
+def surcharge_loads(sc: Scenario) -> list[SurfaceLoad]:
+    """One load on the ground surface per surcharge stage (its ground action's amplitude 0 -> 1).
+
+    Without ``under_cap`` the cap's footprint is left out (a fill placed around the cap).
+    """
+    cap = None
+    if sc.cap is not None:
+        cx, cy = sc.cap.size_x_m / 2, sc.cap.size_y_m / 2
+        cap = (-cx, cx, -cy, cy)
+    return [SurfaceLoad(groups.GROUND, st.surcharge_kPa, action=i,  # type: ignore[arg-type]
+                        area=st.area_m, outside=None if st.under_cap else cap)
+            for i, st in enumerate(ground_actions(sc))]
+
+
+def ground_drainage(sc: Scenario) -> PressureBC:
+    """The drained ground surface: excess pore pressure 0, or ``-gamma_w x drawdown`` (kPa).
+
+    A lowered water table (groundwater stages) prescribes the drop of the pore pressure on the
+    drained surface; the soil above the new water table stays saturated (docs/model.md,
+    "Ground that moves").
+    """
+    if not any(st.kind == "groundwater" for st in sc.stages):
+        return PressureBC(groups.GROUND)
+    return PressureBC(groups.GROUND, value=-GAMMA_W, action=len(ground_actions(sc)))
 
 
 def full_load_area(sc: Scenario, md: MeshData, mesh_size: float | None = None) -> float:
@@ -202,15 +238,28 @@ def estimate_dofs(md: MeshData, element: str) -> int:
 
 
 def solver_stages(sc: Scenario) -> list[SolverStage]:
-    """The scenario's stages as solver stages (load factor 1 = the full cap load)."""
+    """The scenario's stages as solver stages (load factor 1 = the full cap load).
+
+    Surcharge and groundwater stages are ground stages: surcharge ``i`` ramps its action's
+    amplitude from 0 to 1, a groundwater stage the water-table action's amplitude (the
+    drawdown so far, m) by its ``drawdown_m``.
+    """
     out = []
     total = sc.total_cap_load()
+    surcharges = ground_actions(sc)
+    amp = [0.0] * (len(surcharges) + any(st.kind == "groundwater" for st in sc.stages))
     for st, t0, t1 in sc.stage_times():
         if st.kind == "geostatic":
             out.append(SolverStage(st.name, "geostatic"))
         elif st.kind == "load":
             lf = st.cap_load_kN / total if total > 0 else 0.0  # type: ignore[operator]
             out.append(SolverStage(st.name, "load", duration=t1 - t0, load_factor=lf))
+        elif st.kind in ("surcharge", "groundwater"):
+            if st.kind == "surcharge":
+                amp[surcharges.index(st)] = 1.0
+            else:
+                amp[-1] += st.drawdown_m  # type: ignore[operator]
+            out.append(SolverStage(st.name, "ground", duration=t1 - t0, ground=tuple(amp)))
         else:
             out.append(SolverStage(st.name, "consolidation", duration=t1 - t0))
     return out
