@@ -54,6 +54,7 @@ from pilegroup.solver.probes import facet_area
 from pilegroup.studies.results.tables import GAUGES_CSV
 from pilegroup.studies.run.checkpoint import Checkpoints
 from pilegroup.studies.run.gauge_probe import GaugeProbe
+from pilegroup.studies.run.ground_probe import GroundProbe
 from pilegroup.studies.run.pile_probe import LoadSettlementCurve, PileProbe, SettlementSeries
 
 log = logging.getLogger(__name__)
@@ -308,6 +309,7 @@ def run_coupled(sc: Scenario, md: MeshData, out: Path, preset: str | None = None
     settlement = SettlementSeries(pb, load_facets(sc, md), out / "settlement.csv")
     piles = PileProbe(sc, pb, out)
     gauges = GaugeProbe(sc, pb, piles, out / GAUGES_CSV) if sc.outputs.gauge_depths_m else None
+    ground = GroundProbe(sc, pb, piles, out)
 
     def summary(complete: bool) -> dict[str, Any]:
         return {"complete": complete, "dofs": pb.num_dofs, "centre_pile": piles.centre,
@@ -315,6 +317,7 @@ def run_coupled(sc: Scenario, md: MeshData, out: Path, preset: str | None = None
                 "symmetry": {"model": symmetry[0], "reason": symmetry[1]},
                 "element": sc.numerics.element, "preset": pb.linear_solver.preset,
                 "gauge_sections": gauges.summary() if gauges is not None else None,
+                "neutral_plane": ground.summary(),
                 "settlement_m": [{"t_day": t, "stage": s, "settlement_m": w}
                                  for t, s, w in settlement.history],
                 "settlement_sign": "positive = downward (compression-positive habit)",
@@ -324,7 +327,7 @@ def run_coupled(sc: Scenario, md: MeshData, out: Path, preset: str | None = None
     writer = SummaryWriter(out / "summary_solver.json", pb.comm, summary)
     curve = LoadSettlementCurve(pb, settlement.probe, sc.total_cap_load(),
                                 out / "load_settlement.csv")
-    exports: list[Export] = [settlement, piles, curve]
+    exports: list[Export] = [settlement, piles, ground, curve]
     if gauges is not None:
         exports.append(gauges)
     if sc.outputs.xdmf:

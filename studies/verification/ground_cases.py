@@ -29,7 +29,8 @@ from pilegroup.solver import (
     SurfaceLoad,
     run_stages,
 )
-from pilegroup.studies.verification.common import ElasticSoil, box_bcs, eval_points, world
+from pilegroup.solver.probes import eval_points
+from pilegroup.studies.verification.common import ElasticSoil, box_bcs, world
 from pilegroup.studies.verification.consolidation import terzaghi_degree
 from pilegroup.studies.verification.registry import CaseResult, register
 

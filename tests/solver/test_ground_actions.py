@@ -25,7 +25,8 @@ from pilegroup.solver import (
     StepControl,
     run_stages,
 )
-from pilegroup.studies.verification.common import ElasticSoil, box_bcs, eval_points, world
+from pilegroup.solver.probes import eval_points
+from pilegroup.studies.verification.common import ElasticSoil, box_bcs, world
 from pilegroup.studies.verification.consolidation import terzaghi_degree
 from pilegroup.studies.verification.ground_cases import consolidation_surcharge
 
