@@ -12,7 +12,7 @@
   0``, the free field: the soil's settlement along the vertical farthest from the piles in the
   modelled block (a corner; the block's sides are on rollers, so it settles as a wide site);
 * ``surface_trough.csv``: the ground surface's settlement along the line through the group's
-  centre parallel to x, across the whole block.
+  centre parallel to x, across the whole block (points inside a pile left out).
 
 These are the two diagrams of Fellenius' unified method (axial force and settlement against
 depth; docs/model.md, "Ground that moves"). Depths m below the ground surface, positive down;
@@ -104,10 +104,12 @@ class GroundProbe:
                                                             strict=True)]
         free = -self._free()[:, 2]
         self.rows["profiles"] += [f"{t:.6g},0,{a:.6g},,,{b:.9g}"
-                                  for a, b in zip(self.free_depth, free, strict=True)]
-        trough = -self._trough()[:, 2]
+                                  for a, b in zip(self.free_depth, free, strict=True)
+                                  if np.isfinite(b)]
+        trough = -self._trough()[:, 2]  # NaN inside a pile: not a point of the ground
         self.rows["trough"] += [f"{t:.6g},{a:.6g},{b:.9g}"
-                                for a, b in zip(self.trough_x, trough, strict=True)]
+                                for a, b in zip(self.trough_x, trough, strict=True)
+                                if np.isfinite(b)]
         self._write()
 
     def _write(self) -> None:
