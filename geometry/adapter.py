@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 
+from pilegroup.errors import ScenarioError
 from pilegroup.geometry import spec
 from pilegroup.geometry import symmetry as sym
 from pilegroup.model import Scenario
@@ -45,16 +46,32 @@ def _full_spec(sc: Scenario, mesh_size: float | None) -> spec.GeometrySpec:
     )
 
 
+def _load_asymmetry(sc: Scenario, axis: str) -> str | None:
+    """Why the scenario's loads are not mirror-symmetric about ``axis`` = 0; ``None`` if they are.
+
+    The cap load is uniform on the cap top or the pile heads (symmetric with the geometry); a
+    surcharge is symmetric when its rectangle is centred on the plane (the whole surface is).
+    """
+    for st in sc.stages:
+        if st.kind == "surcharge" and st.area_m is not None:
+            lo, hi = st.area_m[:2] if axis == "x" else st.area_m[2:]
+            if abs(lo + hi) > sym.TOL:
+                return (f"surcharge stage {st.name!r} spans {axis} = {lo:g} .. {hi:g} m, not "
+                        f"centred on {axis} = 0")
+    return None
+
+
 def _resolve(sc: Scenario, full: spec.GeometrySpec) -> tuple[sym.Symmetry, str]:
-    """(mode, reason) of ``numerics.symmetry`` for the whole model ``full``.
+    """(mode, reason) of ``numerics.symmetry`` for the whole model ``full`` and its loads.
 
     Raises :class:`~pilegroup.errors.ScenarioError` naming ``numerics.symmetry`` when an
-    explicit mode cuts at a plane the model is not symmetric about.
+    explicit mode cuts at a plane the model or its loads are not symmetric about.
     """
     asked = sc.numerics.symmetry
-    planes = full.symmetry_planes()
-    whys = [f"{a} = 0 ({sym.asymmetry(full.piles, full.cap, a)})"
-            for a in ("x", "y") if a not in planes]
+    why = {a: sym.asymmetry(full.piles, full.cap, a) or _load_asymmetry(sc, a)
+           for a in ("x", "y")}
+    planes = tuple(a for a in ("x", "y") if why[a] is None)
+    whys = [f"{a} = 0 ({why[a]})" for a in ("x", "y") if a not in planes]
     if asked == "auto":
         mode = sym.mode_of(planes)
         if not planes:
@@ -62,7 +79,13 @@ def _resolve(sc: Scenario, full: spec.GeometrySpec) -> tuple[sym.Symmetry, str]:
         reason = (f"auto: pile layout, cap, block and load mirror-symmetric about "
                   f"{sym.describe_planes(planes)}")
         return mode, reason + "".join(f"; not about {w}" for w in whys)
-    replace(full, symmetry=asked)  # validates: the error names numerics.symmetry
+    replace(full, symmetry=asked)  # validates the geometry: the error names numerics.symmetry
+    for a in sym.PLANES[asked]:
+        if why[a] is not None:
+            raise ScenarioError("numerics.symmetry", asked,
+                                f"cuts at {a} = 0, but the load is not mirror-symmetric about "
+                                f"it: {why[a]}; allowed: 'auto' or a mode cutting only at "
+                                "planes of symmetry")
     if asked == "none":
         return "none", "numerics.symmetry = 'none': the full model"
     return asked, (f"numerics.symmetry = '{asked}': pile layout, cap, block and load "

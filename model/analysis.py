@@ -54,43 +54,82 @@ class InterfaceOptions:
             check_bound(f"interface.{key}", getattr(self, key))
 
 
+#: The keys each stage kind takes (required first, then optional), beside ``name`` and ``kind``.
+STAGE_KEYS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
+    "geostatic": ((), ()),
+    "load": (("cap_load_kN", "duration_day"), ()),
+    "consolidation": ((), ("until_day",)),
+    "surcharge": (("surcharge_kPa", "duration_day"), ("area_m", "under_cap")),
+    "groundwater": (("drawdown_m", "duration_day"), ()),
+}
+_STAGE_UNITS = {"cap_load_kN": "kN", "duration_day": "day", "until_day": "day",
+                "surcharge_kPa": "kPa", "area_m": "m", "under_cap": "-", "drawdown_m": "m"}
+
+
 @dataclass(frozen=True)
 class Stage:
     """One analysis stage.
 
     ``kind``: ``geostatic`` (in-situ stresses, no time), ``load`` (ramps the cap load to
     ``cap_load_kN`` over ``duration_day``, drained top, consolidating meanwhile), ``consolidation``
-    (constant load until ``until_day``, or until ``time.end_day`` when omitted).
+    (every action held until ``until_day``, or until ``time.end_day`` when omitted),
+    ``surcharge`` (a pressure ``surcharge_kPa`` placed on the ground surface over
+    ``duration_day``: a fill or an embankment, over the whole surface or the rectangle
+    ``area_m``, and held afterwards) or ``groundwater`` (the water table lowered by
+    ``drawdown_m`` over ``duration_day``, held afterwards). Every action keeps its value in the
+    stages that follow; docs/model.md ("Ground that moves") gives the physics.
     """
 
     name: str
-    kind: Literal["geostatic", "load", "consolidation"]
+    kind: Literal["geostatic", "load", "consolidation", "surcharge", "groundwater"]
     cap_load_kN: float | None = None
+    """Load stage: the vertical cap load at the stage end, kN."""
     duration_day: float | None = None
+    """Load, surcharge and groundwater stages: the time over which the action is ramped, day."""
     until_day: float | None = None
+    """Consolidation stage: its end, day (default ``time.end_day``)."""
+    surcharge_kPa: float | None = None
+    """Surcharge stage: pressure added on the ground surface, kPa (negative: a fill removed)."""
+    area_m: tuple[float, float, float, float] | None = None
+    """Surcharge stage: the loaded rectangle ``[x_min, x_max, y_min, y_max]``, m, in the
+    coordinates of the site (origin at the pile group's centre); default: the whole surface."""
+    under_cap: bool | None = None
+    """Surcharge stage: whether the pressure also acts inside the cap's footprint (default
+    false: a fill placed around a cap does not load the ground beneath it)."""
+    drawdown_m: float | None = None
+    """Groundwater stage: lowering of the water table, m (negative: the water table rises)."""
 
     def __post_init__(self) -> None:
-        if self.kind == "load":
-            if self.cap_load_kN is None:
-                raise ScenarioError("cap_load_kN", None, "missing: required for a load stage", "kN")
+        required, optional = STAGE_KEYS[self.kind]
+        for key in _STAGE_UNITS:
+            value = getattr(self, key)
+            if key in required and value is None:
+                raise ScenarioError(key, None, f"missing: required for a {self.kind} stage",
+                                    _STAGE_UNITS[key])
+            if value is not None and key not in required + optional:
+                kinds = [k for k, (r, o) in STAGE_KEYS.items() if key in r + o]
+                raise ScenarioError(key, value, f"not allowed for a {self.kind} stage (only for"
+                                    f" {' and '.join(kinds)})", _STAGE_UNITS[key])
+        if self.cap_load_kN is not None:
             require_non_negative("cap_load_kN", self.cap_load_kN, "kN")
             check_bound("stages.cap_load_kN", self.cap_load_kN)
-            if self.duration_day is None:
-                raise ScenarioError("duration_day", None, "missing: required for a load stage",
-                                    "day")
-            require_positive("duration_day", self.duration_day, "day")
-            check_bound("stages.duration_day", self.duration_day)
-        else:
-            for key in ("cap_load_kN", "duration_day"):
-                if getattr(self, key) is not None:
-                    raise ScenarioError(key, getattr(self, key),
-                                        f"not allowed for a {self.kind} stage (only for load)")
-        if self.until_day is not None:
-            if self.kind != "consolidation":
-                raise ScenarioError("until_day", self.until_day,
-                                    "only allowed for a consolidation stage", "day")
-            require_positive("until_day", self.until_day, "day")
-            check_bound("stages.until_day", self.until_day)
+        for key in ("duration_day", "until_day"):
+            if getattr(self, key) is not None:
+                require_positive(key, getattr(self, key), "day")
+                check_bound(f"stages.{key}", getattr(self, key))
+        for key in ("surcharge_kPa", "drawdown_m"):
+            if getattr(self, key) is not None:
+                if not is_finite_number(getattr(self, key)) or getattr(self, key) == 0.0:
+                    raise ScenarioError(key, getattr(self, key), "must be a non-zero number",
+                                        _STAGE_UNITS[key])
+                check_bound(f"stages.{key}", getattr(self, key))
+        if self.area_m is not None:
+            x0, x1, y0, y1 = self.area_m
+            if not (is_finite_number(x0) and is_finite_number(x1) and x0 < x1
+                    and is_finite_number(y0) and is_finite_number(y1) and y0 < y1):
+                raise ScenarioError("area_m", list(self.area_m),
+                                    "must be [x_min, x_max, y_min, y_max] with x_min < x_max and"
+                                    " y_min < y_max", "m")
 
 
 @dataclass(frozen=True)

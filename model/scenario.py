@@ -15,6 +15,7 @@ from pilegroup.errors import ScenarioError
 from pilegroup.model.analysis import InterfaceOptions, Numerics, Outputs, Soil, Stage, Time
 from pilegroup.model.mesh_estimate import MAX_CELLS, estimated_cells
 from pilegroup.model.site import Cap, Layer, Piles, Site, Structure
+from pilegroup.model.units import GAMMA_WATER
 
 
 @dataclass(frozen=True)
@@ -40,6 +41,7 @@ class Scenario:
         self._check_plan()
         self._check_cap()
         self._check_stages()
+        self._check_excess_pore_pressure()
         self._check_interfaces()
         self._check_gauges()
         self._check_numerics()
@@ -131,7 +133,7 @@ class Scenario:
                 "not modelled", "-")
 
     def _check_stages(self) -> None:
-        """One geostatic stage first; load and consolidation stages end by ``time.end_day``."""
+        """One geostatic stage first; the other stages end by ``time.end_day``; areas fit."""
         if not self.stages:
             raise ScenarioError("stages", [], "must list at least one stage")
         if self.stages[0].kind != "geostatic":
@@ -142,11 +144,11 @@ class Scenario:
             if i > 0 and st.kind == "geostatic":
                 raise ScenarioError(f"stages[{i}].kind", st.kind,
                                     "only the first stage may be 'geostatic'")
-            if st.kind == "load":
-                t += st.duration_day  # type: ignore[operator]
+            if st.duration_day is not None:
+                t += st.duration_day
                 if t > self.time.end_day:
                     raise ScenarioError("time.end_day", self.time.end_day,
-                                        f"must be >= the end of load stage {st.name!r} at"
+                                        f"must be >= the end of {st.kind} stage {st.name!r} at"
                                         f" {t:g} day", "day")
             elif st.kind == "consolidation":
                 until = self.time.end_day if st.until_day is None else st.until_day
@@ -155,6 +157,35 @@ class Scenario:
                                         f"must be in ({t:g}, time.end_day = "
                                         f"{self.time.end_day:g}]", "day")
                 t = until
+            if st.kind == "surcharge":
+                self._check_surcharge(i, st)
+
+    def _check_surcharge(self, i: int, st: Stage) -> None:
+        """The loaded rectangle lies on the ground surface; ``under_cap`` needs a cap."""
+        if st.under_cap is not None and self.cap is None:
+            raise ScenarioError(f"stages[{i}].under_cap", st.under_cap,
+                                "only allowed when the scenario has a cap", "-")
+        if st.area_m is None:
+            return
+        hx, hy = self.site.size_x_m / 2, self.site.size_y_m / 2
+        x0, x1, y0, y1 = st.area_m
+        if x0 < -hx - 1e-9 or x1 > hx + 1e-9 or y0 < -hy - 1e-9 or y1 > hy + 1e-9:
+            raise ScenarioError(f"stages[{i}].area_m", list(st.area_m),
+                                f"must lie on the ground surface: x in [{-hx:g}, {hx:g}],"
+                                f" y in [{-hy:g}, {hy:g}]", "m")
+
+    def _check_excess_pore_pressure(self) -> None:
+        """A layer's initial excess pore pressure leaves its effective stress compressive."""
+        sv = 0.0  # vertical effective stress at the layer's top, kPa
+        for i, layer in enumerate(self.layers):
+            if layer.excess_pore_pressure_kPa > sv + 1e-9:
+                raise ScenarioError(f"layers[{i}].excess_pore_pressure_kPa",
+                                    layer.excess_pore_pressure_kPa,
+                                    f"must be <= the vertical effective stress at the layer's top"
+                                    f" ({sv:.4g} kPa), or the soil would start with tensile"
+                                    " effective stress; use excess_pore_pressure_ratio", "kPa")
+            thickness = self.layer_bottom(i) - self.layer_top(i)
+            sv += (layer.gamma_kN_per_m3 - GAMMA_WATER) * thickness
 
     def _check_interfaces(self) -> None:
         """Every layer the piles cross has interface parameters, unless the piles are tied.
@@ -222,9 +253,9 @@ class Scenario:
         for st in self.stages:
             if st.kind == "geostatic":
                 out.append((st, 0.0, 0.0))
-            elif st.kind == "load":
-                out.append((st, t, t + st.duration_day))  # type: ignore[operator]
-                t += st.duration_day  # type: ignore[operator]
+            elif st.duration_day is not None:
+                out.append((st, t, t + st.duration_day))
+                t += st.duration_day
             else:
                 end = self.time.end_day if st.until_day is None else st.until_day
                 out.append((st, t, end))

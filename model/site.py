@@ -116,6 +116,12 @@ class Layer(_ElasticMPa):
     """Horizontal hydraulic conductivity, m/day; None: equal to ``k_m_per_day``."""
     interface: InterfaceParams | None = None
     """Pile-soil interface parameters; needed where the piles cross the layer (not tied)."""
+    excess_pore_pressure_ratio: float = 0.0
+    """Excess pore pressure at the start, as a fraction of the vertical effective stress it will
+    carry once dissipated, in [0, 1): a layer still consolidating (under-consolidated)."""
+    excess_pore_pressure_kPa: float = 0.0
+    """Excess pore pressure at the start, kPa, uniform over the layer (e.g. from an earlier
+    fill); at most the vertical effective stress at the layer's top. Not with the ratio."""
 
     def __post_init__(self) -> None:
         if not self.name.strip():
@@ -136,6 +142,14 @@ class Layer(_ElasticMPa):
             if getattr(self, key) is not None:
                 require_positive(key, getattr(self, key), "-" if key == "e0" else "m/day")
                 check_bound(f"layers.{key}", getattr(self, key))
+        require_non_negative("excess_pore_pressure_kPa", self.excess_pore_pressure_kPa, "kPa")
+        check_bound("layers.excess_pore_pressure_kPa", self.excess_pore_pressure_kPa)
+        require_non_negative("excess_pore_pressure_ratio", self.excess_pore_pressure_ratio, "-")
+        check_bound("layers.excess_pore_pressure_ratio", self.excess_pore_pressure_ratio)
+        if self.excess_pore_pressure_ratio > 0.0 and self.excess_pore_pressure_kPa > 0.0:
+            raise ScenarioError("excess_pore_pressure_kPa", self.excess_pore_pressure_kPa,
+                                "give either excess_pore_pressure_ratio or"
+                                " excess_pore_pressure_kPa, not both", "kPa")
 
     @property
     def porosity(self) -> float:

@@ -47,9 +47,13 @@ class Constraints:
             for b in layout.bodies_of_facet(bc.facet):  # all bodies the group touches
                 self.add(layout.facet_dofs(b, bc.facet, bc.component), b.V.sub(bc.component),
                           c, b.u)
+        self._p_consts: list[tuple[PressureBC, fem.Constant]] = []
         for pbc in pressure_bcs:
-            bc, bc0 = self.add(layout.pressure_dofs(pbc.facet), layout.Q,
-                                default_scalar_type(pbc.value), layout.p)
+            value = default_scalar_type(pbc.value)
+            if pbc.action is not None:  # scaled by a ground action's amplitude (set_ground)
+                value = fem.Constant(mesh, default_scalar_type(0.0))
+                self._p_consts.append((pbc, value))
+            bc, bc0 = self.add(layout.pressure_dofs(pbc.facet), layout.Q, value, layout.p)
             if pbc.facet is not None and not pbc.in_undrained_steps:
                 self._drain.update({id(bc), id(bc0)})
         self.plate = RigidPlateControl(self, layout, plates[0], interface) if plates else None
@@ -68,6 +72,16 @@ class Constraints:
         """Prescribed displacements at ``load_factor`` (ramped ones scale with it)."""
         for bc, c in self._u_consts:
             c.value = bc.value * (load_factor if bc.ramp else 1.0)
+
+    @property
+    def actions(self) -> list[int]:
+        """The ground actions the pressure conditions follow."""
+        return [pbc.action for pbc, _ in self._p_consts if pbc.action is not None]
+
+    def set_ground(self, amplitudes: Sequence[float]) -> None:
+        """Prescribed pressures of the conditions that follow a ground action."""
+        for pbc, c in self._p_consts:
+            c.value = pbc.value * amplitudes[pbc.action]  # type: ignore[index]
 
     def active(self, bcs: list[fem.DirichletBC], undrained: bool) -> list[fem.DirichletBC]:
         """The conditions in force in the step (drainage released when undrained)."""

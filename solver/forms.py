@@ -157,7 +157,8 @@ class FormBuilder:
             b = lay.body_of_facet(ld.facet)
             v = self.tests[lay.bodies.index(b)]
             ds = self.ds(md.facet_tag(ld.facet))
-            self.forms.add_F(lay.block_of(b), c * ufl.inner(nrm, v) * ds)
+            self.forms.add_F(lay.block_of(b), c * _plan_window(lay.mesh, ld) * ufl.inner(nrm, v)
+                             * ds)
             out.append((ld, c))
         return out
 
@@ -226,3 +227,19 @@ class FormBuilder:
             P.add_J(i, i, zero * ufl.inner(du, v) * self.dx_body(b))
         P.add_J(1, 1, self.coef.beta * self.dp * self.q * self.dx)
         return P.J
+
+
+def _plan_window(mesh: dmesh.Mesh, ld: SurfaceLoad) -> ufl.core.expr.Expr | float:
+    """1 where load ``ld`` acts in plan (inside ``area``, outside ``outside``), else 0."""
+    x = ufl.SpatialCoordinate(mesh)
+
+    def inside(r: tuple[float, float, float, float]) -> ufl.core.expr.Expr:
+        return ufl.And(ufl.And(ufl.ge(x[0], r[0]), ufl.le(x[0], r[1])),
+                       ufl.And(ufl.ge(x[1], r[2]), ufl.le(x[1], r[3])))
+
+    w: ufl.core.expr.Expr | float = 1.0
+    if ld.area is not None:
+        w = ufl.conditional(inside(ld.area), 1.0, 0.0)
+    if ld.outside is not None:
+        w = w * ufl.conditional(inside(ld.outside), 0.0, 1.0)
+    return w

@@ -5,6 +5,16 @@ ranges, all-reduced over the ranks), ``sigma'_h = K0 sigma'_v``; ``z_top`` is th
 elevation (water table at the ground surface). Solids ("wished in place") take the stress and
 the buoyant weight of the soil layer they replace (zero above ground). Units kPa, m; tension
 positive, so the in-situ stresses are negative.
+
+A layer still consolidating starts with an excess pore pressure ``u0(z) >= 0``
+(``SoilMaterial.excess_ratio`` of ``-sigma'_v`` or ``excess_kPa``): it carries part of the
+weight, so the effective stress is that of the soil at the current stress,
+``sigma'_v + u0`` vertically and ``K0 (sigma'_v + u0)`` horizontally, and the total stress
+(effective minus ``u0``) is ``sigma'_v`` vertically and ``K0 (sigma'_v + u0) - u0``
+horizontally; solids and the interface take that total stress. Every term depends on ``z``
+only, so the state is in equilibrium. ``u0`` is used as the piecewise-linear interpolant
+through the pressure nodes' elevations (:meth:`SoilColumn.set_excess_levels`), the same
+function the pressure field holds, so that the discrete state starts in equilibrium too.
 """
 
 from __future__ import annotations
@@ -28,6 +38,8 @@ class GeostaticLayer:
     z_max: float
     gamma_b: float
     k0: float
+    excess_ratio: float = 0.0
+    excess_kPa: float = 0.0
 
 
 class SoilColumn:
@@ -52,10 +64,42 @@ class SoilColumn:
             z = gx[cdm[cells].reshape(-1), 2] if cells.size else None
             zmin = comm.allreduce(float(z.min()) if z is not None else np.inf, op=MPI.MIN)
             zmax = comm.allreduce(float(z.max()) if z is not None else -np.inf, op=MPI.MAX)
-            layer = GeostaticLayer(zmin, zmax, mat.gamma_sat - GAMMA_W, mat.k0)
+            layer = GeostaticLayer(zmin, zmax, mat.gamma_sat - GAMMA_W, mat.k0,
+                                   mat.excess_ratio, mat.excess_kPa)
             self.layers.append(layer)
             self.by_name[name] = layer
         self.z_top = max(lay.z_max for lay in self.layers) if self.layers else 0.0
+        self._levels: tuple[np.ndarray, np.ndarray] | None = None
+
+    @property
+    def has_excess(self) -> bool:
+        """Whether any layer starts with an excess pore pressure."""
+        return any(lay.excess_ratio > 0.0 or lay.excess_kPa > 0.0 for lay in self.layers)
+
+    def excess_at_nodes(self, z: np.ndarray) -> np.ndarray:
+        """Initial excess pore pressure (kPa, >= 0) of the layers at elevations ``z`` (m).
+
+        At an elevation shared by two layers the lower layer's rule applies.
+        """
+        out = np.zeros_like(z)
+        sv = -self.sigma_v(z)
+        for lay in self.layers:
+            inside = (z >= lay.z_min) & (z <= lay.z_max)
+            out[inside] = lay.excess_ratio * sv[inside] + lay.excess_kPa
+        return out
+
+    def set_excess_levels(self, z_nodes: np.ndarray, comm: MPI.Comm) -> None:
+        """Make ``u0`` the interpolant through the pressure nodes' elevations (all ranks)."""
+        levels = np.unique(np.concatenate(comm.allgather(np.round(z_nodes, 9))))
+        self._levels = (levels, self.excess_at_nodes(levels))
+
+    def excess(self, z: np.ndarray) -> np.ndarray:
+        """Initial excess pore pressure (kPa) at elevations ``z``: the nodal interpolant."""
+        if not self.has_excess:
+            return np.zeros_like(z)
+        if self._levels is None:
+            raise RuntimeError("SoilColumn.set_excess_levels was not called")
+        return np.interp(z, *self._levels)
 
     def sigma_v(self, z: np.ndarray) -> np.ndarray:
         """Vertical geostatic effective stress (kPa, negative) at elevations ``z`` (m)."""
@@ -84,25 +128,28 @@ class SoilColumn:
         out = {}
         for g in (g for qp in states for g in qp.groups):
             z = g.x[:, 2]
-            sv = self.sigma_v(z)
-            k0 = g.material.k0 if isinstance(g.material, SoilMaterial) else self.k0(z)
+            sv, u0 = self.sigma_v(z), self.excess(z)
             s = np.zeros((g.n, 6))
-            s[:, 0] = s[:, 1] = k0 * sv
-            s[:, 2] = sv
+            if isinstance(g.material, SoilMaterial):  # effective stress
+                s[:, 0] = s[:, 1] = g.material.k0 * (sv + u0)
+                s[:, 2] = sv + u0
+            else:  # a solid takes the total stress of the soil it replaces
+                s[:, 0] = s[:, 1] = self.k0(z) * (sv + u0) - u0
+                s[:, 2] = sv
             out[g.name] = s
         return out
 
     def interface_traction(self, z: np.ndarray, soil_group: str | None) -> np.ndarray:
         """In-situ local interface traction ``[sigma_n, 0, 0]`` (kPa) at heights ``z``.
 
-        Shafts (``soil_group`` the adjacent soil layer): ``K0 sigma'_v``; bases
-        (``soil_group = None``): ``sigma'_v``.
+        Shafts (``soil_group`` the adjacent soil layer): ``K0 (sigma'_v + u0) - u0``; bases
+        (``soil_group = None``): ``sigma'_v`` (the soil's total stress, module doc).
         """
-        sv = self.sigma_v(z)
+        sv, u0 = self.sigma_v(z), self.excess(z)
         t = np.zeros((z.size, 3))
         if soil_group is None:
             t[:, 0] = sv
         else:
             layer = self.by_name.get(soil_group)
-            t[:, 0] = (layer.k0 if layer is not None else self.k0(z)) * sv
+            t[:, 0] = (layer.k0 if layer is not None else self.k0(z)) * (sv + u0) - u0
         return t

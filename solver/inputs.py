@@ -38,6 +38,9 @@ class SoilMaterial:
         K0: coefficient of earth pressure at rest; ``None`` gives ``1 - sin(phi)`` when the law
             has ``phi_deg``, else ``nu/(1-nu)``.
         K_w: bulk modulus of the pore water, kPa.
+        excess_ratio: excess pore pressure at the start as a fraction of the vertical
+            effective stress it will carry once dissipated, in [0, 1) (under-consolidated).
+        excess_kPa: excess pore pressure at the start, kPa, uniform over the group.
     """
 
     law: ConstitutiveLaw
@@ -46,6 +49,8 @@ class SoilMaterial:
     gamma_sat: float = GAMMA_W
     K0: float | None = None
     K_w: float = K_WATER
+    excess_ratio: float = 0.0
+    excess_kPa: float = 0.0
 
     def __post_init__(self) -> None:
         err = SolverInputError
@@ -55,6 +60,9 @@ class SoilMaterial:
         require_positive("K_w", self.K_w, "kPa", error=err)
         if self.K0 is not None:
             require_positive("K0", self.K0, "-", error=err)
+        require_in_range("excess_ratio", self.excess_ratio, 0.0, 1.0, "-", hi_open=True,
+                         error=err)
+        require_non_negative("excess_kPa", self.excess_kPa, "kPa", error=err)
         if not hasattr(self.law, "update") or not hasattr(self.law, "initial_state"):
             raise SolverInputError(f"law = {self.law!r} does not follow the constitutive protocol")
 
@@ -301,18 +309,27 @@ class PressureBC:
     facet: str | None
     value: float = 0.0
     in_undrained_steps: bool = False
+    action: int | None = None
+    """Ground action whose amplitude multiplies ``value`` (e.g. a lowered water table)."""
 
 
 @dataclass(frozen=True)
 class SurfaceLoad:
     """Uniform normal pressure (kPa, positive = compressive, pushing into the body).
 
-    The load is ``load_factor * pressure`` when ``ramp`` is true, else constant.
+    The load is ``load_factor * pressure`` when ``ramp`` is true, else constant; with
+    ``action = i`` it is ``pressure`` times the amplitude of ground action ``i`` instead (set by
+    the ground stages, :class:`SolverStage`). ``area`` ``(x_min, x_max, y_min, y_max)`` (m)
+    limits it to a rectangle of the facet group, ``outside`` leaves a rectangle out (e.g. a
+    cap's footprint); a facet cut by an edge of either carries the part inside (quadrature).
     """
 
     facet: str
     pressure: float
     ramp: bool = True
+    action: int | None = None
+    area: tuple[float, float, float, float] | None = None
+    outside: tuple[float, float, float, float] | None = None
 
 
 @dataclass(frozen=True)
@@ -337,21 +354,29 @@ class SolverStage:
         name: label.
         kind: ``"geostatic"`` (K0 stresses, equilibrium check, displacements reset),
             ``"load"`` (load factor ramped linearly from its previous value to ``load_factor``
-            over ``duration``; ``duration = 0`` is one instantaneous, undrained step) or
-            ``"consolidation"`` (constant load to the stage end).
+            over ``duration``; ``duration = 0`` is one instantaneous, undrained step),
+            ``"ground"`` (the ground actions ramped linearly to ``ground`` over ``duration``,
+            the load factor held; ``duration = 0`` is instantaneous) or ``"consolidation"``
+            (every action held to the stage end).
         duration: day.
-        load_factor: load factor at the end of the stage (loads with ``ramp``).
+        load_factor: load factor at the end of a load stage (loads with ``ramp``).
+        ground: a ground stage's amplitudes of the ground actions at its end (the ``action``
+            indices of :class:`SurfaceLoad` and :class:`PressureBC`); the stages before set
+            the start (all 0 at first).
         dt0: first step of this stage (day); ``None`` keeps the stepper's current size.
     """
 
     name: str
-    kind: Literal["geostatic", "load", "consolidation"]
+    kind: Literal["geostatic", "load", "ground", "consolidation"]
     duration: float = 0.0
     load_factor: float = 1.0
+    ground: tuple[float, ...] = ()
     dt0: float | None = None
 
     def __post_init__(self) -> None:
-        if self.kind not in ("geostatic", "load", "consolidation"):
+        if self.kind not in ("geostatic", "load", "ground", "consolidation"):
             raise SolverInputError(f"stage {self.name!r}: kind = {self.kind!r}")
+        if self.ground and self.kind != "ground":
+            raise SolverInputError(f"stage {self.name!r}: ground amplitudes need kind 'ground'")
         require_non_negative(f"stage {self.name!r} duration", self.duration, "day",
                              error=SolverInputError)

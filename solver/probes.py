@@ -1,4 +1,4 @@
-"""Scalar probes of a problem's state: facet areas and mean displacements over facet groups.
+"""Probes of a problem's state: facet areas, mean displacements over facet groups, point values.
 
 Every value is all-reduced over ``mesh.comm``; units m and m^2.
 """
@@ -8,8 +8,9 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
+import numpy as np
 import ufl
-from dolfinx import fem
+from dolfinx import fem, geometry
 from mpi4py import MPI
 
 from pilegroup.geometry.meshdata import MeshData
@@ -49,3 +50,52 @@ class SettlementProbe:
         """Current settlement, m (down positive), all-reduced."""
         val = fem.assemble_scalar(self._num)
         return self._comm.allreduce(val, op=MPI.SUM) / self._area
+
+
+class PointSampler:
+    """Values of a function at fixed points, located once, gathered on every rank.
+
+    Each point is evaluated in one of the cells owned by a rank that contains it; a point that
+    lies in cells of several ranks gets the mean of their values, a point in no cell of the
+    function's mesh NaN (e.g. a soil point inside a pile on the soil's sub-mesh).
+
+    Args:
+        f: the function (its mesh locates the points).
+        pts: ``(n, 3)`` points, m.
+    """
+
+    def __init__(self, f: fem.Function, pts: np.ndarray) -> None:
+        mesh = f.function_space.mesh
+        self.f, self.comm = f, mesh.comm
+        self.pts = np.asarray(pts, dtype=float).reshape(-1, 3)
+        tree = geometry.bb_tree(mesh, mesh.topology.dim)
+        cand = geometry.compute_collisions_points(tree, self.pts)
+        coll = geometry.compute_colliding_cells(mesh, cand, self.pts)
+        nloc = mesh.topology.index_map(mesh.topology.dim).size_local
+        self.cells = np.full(self.pts.shape[0], -1, dtype=np.int32)
+        for i in range(self.pts.shape[0]):
+            cells = coll.links(i)
+            cells = cells[cells < nloc]
+            if cells.size:
+                self.cells[i] = cells[0]
+        self.found = self.comm.allreduce((self.cells >= 0).astype(float), op=MPI.SUM)
+
+    def __call__(self) -> np.ndarray:
+        """Current values, ``(n, bs)`` squeezed (collective)."""
+        bs = self.f.function_space.dofmap.bs
+        vals = np.zeros((self.pts.shape[0], bs))
+        mine = self.cells >= 0
+        if mine.any():
+            vals[mine] = self.f.eval(self.pts[mine], self.cells[mine])
+        vals = self.comm.allreduce(vals, op=MPI.SUM)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            out = np.where(self.found[:, None] > 0, vals / self.found[:, None], np.nan)
+        return out.squeeze()
+
+
+def eval_points(f: fem.Function, pts: np.ndarray) -> np.ndarray:
+    """Values of ``f`` at the points ``pts`` (``(n, 3)``, m) on every rank (:class:`PointSampler`).
+
+    A point outside the function's mesh gets NaN.
+    """
+    return PointSampler(f, pts)()

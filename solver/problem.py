@@ -91,6 +91,9 @@ class BiotProblem:
         self.timings = {"assemble_F": 0.0, "assemble_J": 0.0, "solve": 0.0, "law": 0.0}
         self.layout = BlockLayout(md, materials, disc, separate=interface is not None)
         self.column = SoilColumn(md, materials)
+        if self.column.has_excess:
+            self.column.set_excess_levels(self.layout.Q.tabulate_dof_coordinates()[:, 2],
+                                          self.comm)
         self.coef = Coefficients(self.layout, disc, self.column)
         self.interface = self._define_interface(interface)
         self._define_forms(loads, self_weight)
@@ -202,7 +205,7 @@ class BiotProblem:
 
     @property
     def has_solids(self) -> bool:
-        """Whether any cell group is an elastic solid."""
+        """Whether the mesh has structure (pile/cap) cells."""
         return self.layout.has_solids
 
     @property
@@ -257,11 +260,6 @@ class BiotProblem:
         self.solve_linear(rhs, out)
 
     @property
-    def plate_U(self) -> float:
-        """Current rigid-plate displacement, m (0 without a plate)."""
-        return self.plate.value if self.plate is not None else 0.0
-
-    @property
     def refactorisations(self) -> int:
         """LU factorisations of the run (direct presets; 0 for iterative ones)."""
         return self.linear_solver.refactorisations
@@ -313,10 +311,23 @@ class BiotProblem:
         self.load_factor = load_factor
         self.undrained = dt == 0.0
         for ld, c in self._load_consts:
-            c.value = ld.pressure * (load_factor if ld.ramp else 1.0)
+            if ld.action is None:
+                c.value = ld.pressure * (load_factor if ld.ramp else 1.0)
         self.constraints.set_load(load_factor)
         self.constraints.apply_values(self.undrained)
         self.layout.fields_to_x(self.x)
+
+    def set_ground(self, amplitudes: Sequence[float]) -> None:
+        """Amplitudes of the ground actions (surcharges, water table) for the next steps."""
+        n = 1 + max([ld.action for ld, _ in self._load_consts if ld.action is not None]
+                    + self.constraints.actions, default=-1)
+        if len(amplitudes) < n:
+            raise SolverInputError(f"ground amplitudes: {len(amplitudes)} given, the loads and "
+                                   f"pressure conditions use {n}")
+        for ld, c in self._load_consts:
+            if ld.action is not None:
+                c.value = ld.pressure * amplitudes[ld.action]
+        self.constraints.set_ground(amplitudes)
 
     def active(self, bcs: list[fem.DirichletBC]) -> list[fem.DirichletBC]:
         """The conditions in force in the current step (drainage released when undrained)."""
@@ -468,6 +479,18 @@ class BiotProblem:
     def geostatic_stress(self) -> dict[str, np.ndarray]:
         """K0 effective stress at the quadrature points of each group (Mandel, kPa)."""
         return self.column.stress([b.qp for b in self.bodies])
+
+    @property
+    def has_initial_excess(self) -> bool:
+        """Whether a soil group starts with an excess pore pressure (consolidating layers)."""
+        return self.column.has_excess
+
+    def set_initial_pressure(self) -> None:
+        """The excess pore pressure at the start: the layers' ``u0`` (0 unless given)."""
+        lay = self.layout
+        z = lay.Q.tabulate_dof_coordinates()[:, 2]
+        for f in (lay.p, lay.p_n):
+            f.x.array[:] = self.column.excess(z)
 
     def set_initial_stress(self, stress0: Mapping[str, np.ndarray | None]) -> None:
         """Initialise every group's law state with ``stress0[name]`` ((n,6) Mandel kPa)."""

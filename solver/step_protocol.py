@@ -8,7 +8,7 @@ Block vectors hold the unknowns in the order of the block layout (``[u, p, u_str
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Protocol
 
@@ -147,6 +147,19 @@ class StepProblem(Protocol):
 
     def fall_back_linear_solver(self, reason: str) -> bool:
         """Switch to the fallback linear solver, if there is one; whether it switched."""
+        ...
+
+    def set_ground(self, amplitudes: Sequence[float]) -> None:
+        """Amplitudes of the ground actions (surcharges, water table) for the next steps."""
+        ...
+
+    @property
+    def has_initial_excess(self) -> bool:
+        """Whether a soil group starts with an excess pore pressure (consolidating layers)."""
+        ...
+
+    def set_initial_pressure(self) -> None:
+        """The excess pore pressure at the start (the consolidating layers'; else 0)."""
         ...
 
     def geostatic_stress(self) -> dict[str, np.ndarray]:

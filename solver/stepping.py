@@ -14,9 +14,13 @@ Stages (docs/model.md):
   so the answer is that of an undrained check, and its Jacobian is the next step's (a reused
   LU factorisation then serves both). A step that fails in the linear solver is solved again
   with the preset's fallback, if it has one (as an instantaneous step).
+  When a layer starts with an excess pore pressure (consolidating layers), the check step is
+  undrained (no water may flow before the first stage that has a duration).
 * ``load``: load factor ramped linearly to the stage's value; ``duration = 0`` is one
   instantaneous undrained step.
-* ``consolidation``: constant load to the stage end.
+* ``ground``: the amplitudes of the ground actions (surcharges, water table) ramped linearly to
+  the stage's values, the load factor held; ``duration = 0`` is instantaneous.
+* ``consolidation``: every action held to the stage end.
 
 A run can be resumed: :class:`RunState` is where the stage loop is (stage, t, load factor) and
 what the stepper remembers (``dt``, ``easy``, the run log); :func:`run_stages` starts from a
@@ -69,10 +73,12 @@ class AdaptiveStepper:
         on_milestone: Callback | None = None,
         on_step: Callback | None = None,
         on_boundary: Callable[[float, bool], None] | None = None,
+        ground: Callable[[float], tuple[float, ...]] | None = None,
     ) -> float:
         """Advance from ``t0`` to ``t1`` (day); returns ``t1``.
 
-        ``load_factor(t)`` gives the load factor at time ``t``; ``on_milestone(problem, t,
+        ``load_factor(t)`` gives the load factor at time ``t``, ``ground(t)`` (if given) the
+        amplitudes of the ground actions; ``on_milestone(problem, t,
         stage)`` is called after the accepted step that lands on each milestone in
         ``(t0, t1]`` (``t1`` included); ``on_step(problem, t, stage)`` after every accepted step
         (e.g. a progress bar); ``on_boundary(t, output)`` at every step boundary, after the
@@ -90,6 +96,8 @@ class AdaptiveStepper:
                 if landing:
                     dt = m - t
                 t_new = m if landing else t + dt
+                if ground is not None:
+                    problem.set_ground(ground(t_new))
                 info = problem.solve_step(dt, load_factor(t_new))
                 if not info.converged:
                     self._reject(problem, info, t, dt, load_factor, stage)
@@ -242,6 +250,8 @@ class _Run:
                  state: RunState, boundary: Boundary | None) -> None:
         self.problem, self.stages, self.ts = problem, stages, ts
         self.state, self.boundary = state, boundary
+        #: amplitudes of the ground actions: none when no stage sets them
+        self.n_ground = max((len(st.ground) for st in stages), default=0)
         self.stepper = AdaptiveStepper(ts, state.log)
         if state.dt is not None:
             self.stepper.dt = state.dt
@@ -261,33 +271,42 @@ class _Run:
         s, log = self.state, self.state.log
         t_wall = time.perf_counter() - log.wall_s
         t = lam = 0.0  # the start of each stage, the same arithmetic in a resumed run
+        g = (0.0,) * self.n_ground
         for i, st in enumerate(self.stages):
             t1 = t + st.duration
             lam1 = st.load_factor if st.kind == "load" else lam
+            g1 = tuple(st.ground) + g[len(st.ground):] if st.kind == "ground" else g
             if i < s.stage or (i == s.stage and s.done):
-                t, lam = t1, lam1
+                t, lam, g = t1, lam1, g1
                 continue
             resume = i == s.stage and s.started
             s.stage, s.started, s.done = i, True, False
             if st.kind == "geostatic":
+                self._set_ground(g)
                 self._geostatic(i, st, t, lam, geostatic_tol, on_milestone)
-            elif st.kind == "load" and st.duration == 0.0:
+            elif st.kind in ("load", "ground") and st.duration == 0.0:
+                self._set_ground(g1)
                 self._instantaneous(st, t, lam, lam1, on_milestone)
             else:
                 if st.dt0 is not None and not resume:
                     self.stepper.dt = st.dt0
                 self._advance(st, (t, t1, lam, lam1), s.t if resume else t, on_milestone,
-                              on_step)
-            t, lam = t1, lam1
+                              on_step, (g, g1))
+            t, lam, g = t1, lam1, g1
         log.wall_s = time.perf_counter() - t_wall
         return log
+
+    def _set_ground(self, g: tuple[float, ...]) -> None:
+        if self.n_ground:
+            self.problem.set_ground(g)
 
     def _geostatic(self, i: int, st: SolverStage, t: float, lam: float, tol: float,
                    on_milestone: Callback) -> None:
         """K0 stress, one equilibrium check step, displacements reset (see the module doc)."""
         problem, log = self.problem, self.state.log
         problem.set_initial_stress(problem.geostatic_stress())
-        dt = first_dt(self.stages[i + 1:], self.ts)
+        problem.set_initial_pressure()
+        dt = 0.0 if problem.has_initial_excess else first_dt(self.stages[i + 1:], self.ts)
         info = problem.solve_step(dt, lam)
         if not info.converged and problem.fall_back_linear_solver(info.message):
             problem.rollback()
@@ -326,19 +345,26 @@ class _Run:
         self.at_boundary(t, lam1, True, done=True)
 
     def _advance(self, st: SolverStage, span: tuple[float, float, float, float], t_from: float,
-                 on_milestone: Callback, on_step: Callback | None) -> None:
-        """A ramped load or a consolidation stage, from ``t_from`` to its end."""
+                 on_milestone: Callback, on_step: Callback | None,
+                 ground: tuple[tuple[float, ...], tuple[float, ...]]) -> None:
+        """A ramped load or ground stage, or a consolidation stage, from ``t_from`` to its end."""
         t0, t1, lam0, lam1 = span
+        g0, g1 = ground
+
+        def frac(tt: float) -> float:
+            return 1.0 if t1 <= t0 else min(max((tt - t0) / (t1 - t0), 0.0), 1.0)
 
         def lam_of(tt: float) -> float:
-            if t1 <= t0:
-                return lam1
-            return lam0 + (lam1 - lam0) * min(max((tt - t0) / (t1 - t0), 0.0), 1.0)
+            return lam0 + (lam1 - lam0) * frac(tt)
+
+        def ground_of(tt: float) -> tuple[float, ...]:
+            return tuple(a + (b - a) * frac(tt) for a, b in zip(g0, g1, strict=True))
 
         def boundary(t: float, output: bool) -> None:
             self.at_boundary(t, lam_of(t), output, done=output and t >= t1)
 
         self.stepper.advance(self.problem, t_from, t1, lam_of, st.name,
-                             on_milestone=on_milestone, on_step=on_step, on_boundary=boundary)
+                             on_milestone=on_milestone, on_step=on_step, on_boundary=boundary,
+                             ground=ground_of if self.n_ground else None)
         if t1 <= t_from:  # nothing to step (zero duration): the stage end is reached as is
             self.at_boundary(t1, lam1, True, done=True)

@@ -15,6 +15,7 @@ from matplotlib.figure import Figure
 
 from pilegroup.fileio import atomic_path
 from pilegroup.studies.report.gauge_plots import GAUGE_FIGURES
+from pilegroup.studies.report.ground_plots import GROUND_FIGURES
 from pilegroup.studies.report.paper_values import (
     EARLY_DAY,
     PAPER_MESH_M,
@@ -189,6 +190,7 @@ FIGURES: tuple[tuple[str, str, str, Callable[[RunData], Figure]], ...] = (
     ("load_settlement.png", "Load–settlement curve (every accepted step)", "load_settlement",
      plot_load_settlement),
     *GAUGE_FIGURES,
+    *GROUND_FIGURES,
 )
 
 

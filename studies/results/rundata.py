@@ -26,8 +26,11 @@ from pilegroup.studies.results.tables import (
     LAYER_HISTORY_CSV,
     LOAD_SETTLEMENT_CSV,
     LOADS_CSV,
+    NEUTRAL_PLANE_CSV,
     PROFILES_CSV,
     SETTLEMENT_CSV,
+    SETTLEMENT_PROFILES_CSV,
+    TROUGH_CSV,
     Table,
     read_csv,
 )
@@ -36,7 +39,7 @@ log = logging.getLogger(__name__)
 
 #: The CSV files a run folder is read from, in this order.
 RUN_FILES = (SETTLEMENT_CSV, PROFILES_CSV, LAYER_HISTORY_CSV, LOADS_CSV, LOAD_SETTLEMENT_CSV,
-             GAUGES_CSV)
+             GAUGES_CSV, NEUTRAL_PLANE_CSV, SETTLEMENT_PROFILES_CSV, TROUGH_CSV)
 
 #: Default centre pile of a 3 x 3 group numbered row by row.
 DEFAULT_CENTRE_PILE = 5
@@ -73,6 +76,12 @@ class RunData:
     t_load: float | None
     layer_names: dict[int, str]
     gauges: Table | None = None
+    neutral: Table | None = None
+    """``neutral_plane.csv``, every pile."""
+    settlement_profiles: Table | None = None
+    """``settlement_profiles.csv``, every pile and the free field (``pile = 0``)."""
+    trough: Table | None = None
+    """``surface_trough.csv``."""
 
     @property
     def complete(self) -> bool | None:
@@ -162,7 +171,8 @@ def load_run(out_dir: Path) -> RunData:
     return RunData(out_dir, raw[SETTLEMENT_CSV], profiles, history, raw[LOADS_CSV],
                    raw[LOAD_SETTLEMENT_CSV], summary, centre,
                    _end_of_loading(raw[SETTLEMENT_CSV], scenario), names,
-                   _centre_only(GAUGES_CSV, raw[GAUGES_CSV], centre))
+                   _centre_only(GAUGES_CSV, raw[GAUGES_CSV], centre), raw[NEUTRAL_PLANE_CSV],
+                   raw[SETTLEMENT_PROFILES_CSV], raw[TROUGH_CSV])
 
 
 def layer_series(run: RunData, column: str) -> dict[int, tuple[np.ndarray, np.ndarray]]:

@@ -25,7 +25,14 @@ positive down; forces kN; stresses kPa; displacements m.
   pile stress, interface shear averaged over the same interval, pile minus adjacent soil
   displacement), ``w_pile_mm`` (the model's pile settlement there) and the errors of the field
   method, field minus model: ``N_error_kN,f_error_kPa,w_error_mm``; every pile, every output
-  time.
+  time;
+* ``neutral_plane.csv``: ``t_day,pile,neutral_plane_depth_m,dragload_kN,downdrag_m,
+  head_load_kN,max_axial_force_kN,head_settlement_m`` (:mod:`pilegroup.studies.results.downdrag`);
+* ``settlement_profiles.csv``: ``t_day,pile,depth_m,axial_force_kN,pile_settlement_m,
+  soil_settlement_m`` (per pile at its element layers: the soil beside the pile; ``pile = 0``:
+  the free field, axial force and pile settlement empty);
+* ``surface_trough.csv``: ``t_day,x_m,settlement_m`` (the ground surface through the group's
+  centre, parallel to x).
 """
 
 from __future__ import annotations
@@ -44,6 +51,9 @@ INTERFACE_LAYERS_CSV = "interface_layers.csv"
 LOADS_CSV = "pile_loads.csv"
 LOAD_SETTLEMENT_CSV = "load_settlement.csv"
 GAUGES_CSV = "gauges.csv"
+NEUTRAL_PLANE_CSV = "neutral_plane.csv"
+SETTLEMENT_PROFILES_CSV = "settlement_profiles.csv"
+TROUGH_CSV = "surface_trough.csv"
 
 _LAYER_MEANS = ("t_day", "pile", "layer", "layer_name", "depth_top_m", "depth_bottom_m",
                 "shaft_friction_kPa", "relative_displacement_m", "viscoplastic_slip_m",
@@ -61,6 +71,11 @@ COLUMNS: dict[str, tuple[str, ...]] = {
     GAUGES_CSV: ("time_day", "pile", "section", "depth_m", "strain", "N_kN", "f_kPa", "w_mm",
                  "N_model_kN", "f_model_kPa", "w_model_mm", "w_pile_mm", "N_error_kN",
                  "f_error_kPa", "w_error_mm"),
+    NEUTRAL_PLANE_CSV: ("t_day", "pile", "neutral_plane_depth_m", "dragload_kN", "downdrag_m",
+                        "head_load_kN", "max_axial_force_kN", "head_settlement_m"),
+    SETTLEMENT_PROFILES_CSV: ("t_day", "pile", "depth_m", "axial_force_kN", "pile_settlement_m",
+                              "soil_settlement_m"),
+    TROUGH_CSV: ("t_day", "x_m", "settlement_m"),
 }
 #: The columns that hold text; all others hold numbers.
 TEXT_COLUMNS = frozenset({"stage", "layer_name"})
@@ -72,6 +87,9 @@ LAYER_COLUMNS = ",".join(_LAYER_MEANS)
 LOAD_COLUMNS = ",".join(COLUMNS[LOADS_CSV])
 LOAD_SETTLEMENT_COLUMNS = ",".join(COLUMNS[LOAD_SETTLEMENT_CSV])
 GAUGE_COLUMNS = ",".join(COLUMNS[GAUGES_CSV])
+NEUTRAL_PLANE_COLUMNS = ",".join(COLUMNS[NEUTRAL_PLANE_CSV])
+SETTLEMENT_PROFILE_COLUMNS = ",".join(COLUMNS[SETTLEMENT_PROFILES_CSV])
+TROUGH_COLUMNS = ",".join(COLUMNS[TROUGH_CSV])
 #: The value columns of ``gauges.csv`` (after time, pile, section and depth).
 GAUGE_VALUES = COLUMNS[GAUGES_CSV][4:]
 

@@ -95,6 +95,7 @@ class PileProbe:
         D0 = fem.functionspace(body.mesh, ("DG", 0))
         vol = fem.assemble_vector(fem.form(ufl.TestFunction(D0) * ufl.dx))
         self._vol = vol.array
+        self._uz_form = fem.form(body.u[2] * ufl.TestFunction(D0) * ufl.dx)
         # element layers of each pile: (pile, z_mid) bins, global
         self._pile_cells: dict[int, tuple[np.ndarray, np.ndarray]] = {}
         for g in body.qp.groups:
@@ -204,15 +205,48 @@ class PileProbe:
         return {i: {m + 1: tuple(acc[i, m, 1:] / acc[i, m, 0]) for m in range(L)
                     if acc[i, m, 0] > 0} for i in range(1, P + 1)}
 
-    # ------------------------------------------------------------------ recording
-    def record_output(self, t: float) -> None:
-        """Profiles of every pile and pile head loads at output time ``t`` (collective)."""
-        averages = self.body.qp.cell_average("stress")
-        fields = self._itf.nodal_fields() if self._itf is not None else None
+    def load_forces(self, averages: dict | None = None
+                    ) -> dict[int, tuple[np.ndarray, np.ndarray]]:
+        """Per meshed pile: (depths, axial force kN due to the loads, of the whole pile).
+
+        The force after the geostatic stage (the first call) is subtracted; a cut pile's
+        meshed section is scaled to the whole pile. Collective.
+        """
+        if averages is None:
+            averages = self.body.qp.cell_average("stress")
         forces = {}
         for k in self.fraction:
             dN, N = self.axial_force(k, averages)
             forces[k] = (dN, (N - self._N0.setdefault(k, N.copy())) / self.fraction[k])
+        return forces
+
+    def settlement(self, i: int) -> tuple[np.ndarray, np.ndarray]:
+        """(depths of the element-layer mid-heights, mean settlement m) of meshed pile ``i``.
+
+        The volume mean of the pile's vertical displacement over each element layer, down
+        positive (collective).
+        """
+        levels = self._levels[i]
+        cells, zc = self._pile_cells.get(i, (np.zeros(0, np.int32), np.zeros(0)))
+        vec = fem.assemble_vector(self._uz_form)
+        acc = np.zeros((2, levels.size))
+        below = zc < 0.0
+        k = np.searchsorted(-levels, -zc[below])
+        np.add.at(acc[0], k, self._vol[cells[below]])
+        np.add.at(acc[1], k, vec.array[cells[below]])
+        acc = _sum(self.comm, acc)
+        return -levels, -acc[1] / np.where(acc[0] > 0, acc[0], 1.0)
+
+    def nodal_fields(self) -> dict[str, np.ndarray] | None:
+        """The interface's nodal fields (``None`` for tied piles); collective."""
+        return self._itf.nodal_fields() if self._itf is not None else None
+
+    # ------------------------------------------------------------------ recording
+    def record_output(self, t: float) -> None:
+        """Profiles of every pile and pile head loads at output time ``t`` (collective)."""
+        averages = self.body.qp.cell_average("stress")
+        fields = self.nodal_fields()
+        forces = self.load_forces(averages)
         for i in range(1, len(self.xy) + 1):
             dN, N = forces[self.source[i]]
             if N.size:

@@ -28,8 +28,9 @@ from pilegroup.geometry import groups
 from pilegroup.geometry.adapter import ResolvedGeometry
 from pilegroup.geometry.meshdata import MeshData
 from pilegroup.geometry.symmetry import PLANES
-from pilegroup.model import Scenario, ScenarioError
+from pilegroup.model import Scenario, ScenarioError, Stage
 from pilegroup.solver import (
+    GAMMA_W,
     BiotProblem,
     Discretisation,
     DisplacementBC,
@@ -54,6 +55,7 @@ from pilegroup.studies.results.records import SOLVER_SUMMARY_JSON, RunSummary
 from pilegroup.studies.results.tables import GAUGES_CSV
 from pilegroup.studies.run.checkpoint import Checkpoints
 from pilegroup.studies.run.gauge_probe import GaugeProbe
+from pilegroup.studies.run.ground_probe import GroundProbe
 from pilegroup.studies.run.pile_probe import LoadSettlementCurve, PileProbe, SettlementSeries
 
 log = logging.getLogger(__name__)
@@ -121,7 +123,8 @@ def build_problem(sc: Scenario, geo: ResolvedGeometry, md: MeshData, preset: str
     materials: dict[str, SoilMaterial | ElasticSolid] = {}
     for j, lay in enumerate(sc.layers):
         materials[groups.soil_layer(j + 1)] = SoilMaterial(
-            soil_law(sc, j), lay.k_m_per_day, lay.porosity, lay.gamma_kN_per_m3, K0=lay.K0)
+            soil_law(sc, j), lay.k_m_per_day, lay.porosity, lay.gamma_kN_per_m3, K0=lay.K0,
+            excess_ratio=lay.excess_pore_pressure_ratio, excess_kPa=lay.excess_pore_pressure_kPa)
     solid = ElasticSolid(sc.structure.E, sc.structure.nu)
     for name in md.cell_names:
         if groups.is_structure(name):
@@ -133,7 +136,8 @@ def build_problem(sc: Scenario, geo: ResolvedGeometry, md: MeshData, preset: str
     dbcs = [DisplacementBC(f, c) for f, c in rollers if f in md.facet_names]
     dbcs += [DisplacementBC(groups.BOTTOM, c) for c in range(3)]
     names = load_facets(sc, md)
-    loads = [SurfaceLoad(f, sc.total_cap_load() / full_load_area(sc, geo, md)) for f in names]
+    loads = [SurfaceLoad(f, sc.total_cap_load() / full_load_area(sc, geo, md))
+             for f in names] + surcharge_loads(sc)
     disc = Discretisation(sc.numerics.element)
     p = preset or sc.numerics.solver.preset
     if p == "auto":
@@ -144,8 +148,42 @@ def build_problem(sc: Scenario, geo: ResolvedGeometry, md: MeshData, preset: str
     opts = SolverOptions(preset=p, overrides=dict(num.solver.options), newton=newton,
                          band_layers=band_layers(h))
     return BiotProblem(md, materials, disc, displacement_bcs=dbcs,
-                       pressure_bcs=[PressureBC(groups.GROUND)], loads=loads, options=opts,
+                       pressure_bcs=[ground_drainage(sc)], loads=loads, options=opts,
                        interface=interface_coupling(sc, h))
+
+
+def ground_actions(sc: Scenario) -> list[Stage]:
+    """The surcharge stages, in order: ground action ``i`` is the ``i``-th of them.
+
+    Every groundwater stage moves one more action, the water table's (the last one).
+    """
+    return [st for st in sc.stages if st.kind == "surcharge"]
+
+
+def surcharge_loads(sc: Scenario) -> list[SurfaceLoad]:
+    """One load on the ground surface per surcharge stage (its ground action's amplitude 0 -> 1).
+
+    Without ``under_cap`` the cap's footprint is left out (a fill placed around the cap).
+    """
+    cap = None
+    if sc.cap is not None:
+        cx, cy = sc.cap.size_x_m / 2, sc.cap.size_y_m / 2
+        cap = (-cx, cx, -cy, cy)
+    return [SurfaceLoad(groups.GROUND, st.surcharge_kPa, action=i,  # type: ignore[arg-type]
+                        area=st.area_m, outside=None if st.under_cap else cap)
+            for i, st in enumerate(ground_actions(sc))]
+
+
+def ground_drainage(sc: Scenario) -> PressureBC:
+    """The drained ground surface: excess pore pressure 0, or ``-gamma_w x drawdown`` (kPa).
+
+    A lowered water table (groundwater stages) prescribes the drop of the pore pressure on the
+    drained surface; the soil above the new water table stays saturated (docs/model.md,
+    "Ground that moves").
+    """
+    if not any(st.kind == "groundwater" for st in sc.stages):
+        return PressureBC(groups.GROUND)
+    return PressureBC(groups.GROUND, value=-GAMMA_W, action=len(ground_actions(sc)))
 
 
 def full_load_area(sc: Scenario, geo: ResolvedGeometry, md: MeshData) -> float:
@@ -205,15 +243,28 @@ def estimate_dofs(md: MeshData, element: str) -> int:
 
 
 def solver_stages(sc: Scenario) -> list[SolverStage]:
-    """The scenario's stages as solver stages (load factor 1 = the full cap load)."""
+    """The scenario's stages as solver stages (load factor 1 = the full cap load).
+
+    Surcharge and groundwater stages are ground stages: surcharge ``i`` ramps its action's
+    amplitude from 0 to 1, a groundwater stage the water-table action's amplitude (the
+    drawdown so far, m) by its ``drawdown_m``.
+    """
     out = []
     total = sc.total_cap_load()
+    surcharges = ground_actions(sc)
+    amp = [0.0] * (len(surcharges) + any(st.kind == "groundwater" for st in sc.stages))
     for st, t0, t1 in sc.stage_times():
         if st.kind == "geostatic":
             out.append(SolverStage(st.name, "geostatic"))
         elif st.kind == "load":
             lf = st.cap_load_kN / total if total > 0 else 0.0  # type: ignore[operator]
             out.append(SolverStage(st.name, "load", duration=t1 - t0, load_factor=lf))
+        elif st.kind in ("surcharge", "groundwater"):
+            if st.kind == "surcharge":
+                amp[surcharges.index(st)] = 1.0
+            else:
+                amp[-1] += st.drawdown_m  # type: ignore[operator]
+            out.append(SolverStage(st.name, "ground", duration=t1 - t0, ground=tuple(amp)))
         else:
             out.append(SolverStage(st.name, "consolidation", duration=t1 - t0))
     return out
@@ -263,6 +314,7 @@ def run_coupled(sc: Scenario, geo: ResolvedGeometry, md: MeshData, out: Path,
     settlement = SettlementSeries(pb, load_facets(sc, md), out / "settlement.csv")
     piles = PileProbe(sc, geo, pb, out)
     gauges = GaugeProbe(sc, pb, piles, out / GAUGES_CSV) if sc.outputs.gauge_depths_m else None
+    ground = GroundProbe(sc, pb, piles, out)
 
     def summary(complete: bool) -> RunSummary:
         return {"complete": complete, "dofs": pb.num_dofs, "centre_pile": piles.centre,
@@ -270,6 +322,7 @@ def run_coupled(sc: Scenario, geo: ResolvedGeometry, md: MeshData, out: Path,
                 "symmetry": {"model": geo.symmetry, "reason": geo.reason},
                 "element": sc.numerics.element, "preset": pb.linear_solver.preset,
                 "gauge_sections": gauges.summary() if gauges is not None else None,
+                "neutral_plane": ground.summary(),
                 "settlement_m": [{"t_day": t, "stage": s, "settlement_m": w}
                                  for t, s, w in settlement.history],
                 "settlement_sign": "positive = downward (compression-positive habit)",
@@ -279,7 +332,7 @@ def run_coupled(sc: Scenario, geo: ResolvedGeometry, md: MeshData, out: Path,
     writer = SummaryWriter(out / SOLVER_SUMMARY_JSON, pb.comm, summary)
     curve = LoadSettlementCurve(pb, settlement.probe, sc.total_cap_load(),
                                 out / "load_settlement.csv")
-    exports: list[Export] = [settlement, piles, curve]
+    exports: list[Export] = [settlement, piles, ground, curve]
     if gauges is not None:
         exports.append(gauges)
     if sc.outputs.xdmf:

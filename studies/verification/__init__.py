@@ -9,7 +9,9 @@ the tolerance and the source of the reference. Modules:
   problem builders the cases share;
 * ``consolidation``: ``terzaghi``, ``mandel`` (with their closed forms; the first-step check);
 * ``soil``: ``triaxial`` (and the strip-footing measurements);
-* ``interface``: ``shaft-capacity``, ``interface-patch``, ``tied-limit``;
+* ``interface_cases``: ``shaft-capacity``, ``interface-patch``, ``tied-limit``;
+* ``ground_cases``: ``consolidation-surcharge`` (ground that moves);
+* ``downdrag_cases``: ``downdrag-end-bearing``, ``downdrag-floating`` (the whole run pipeline);
 * ``runner``: :func:`run_cases` and :func:`main`
   (``python -m pilegroup.studies.verification [CASE ...] [--size fast|bench] [--json]``,
   also under ``mpirun -n 2``; ``pilegroup verify``).
@@ -18,7 +20,13 @@ the tolerance and the source of the reference. Modules:
 # The case modules register their cases when imported: this order is the order in which
 # ``pilegroup verify`` runs and lists them.
 # isort: off
-from pilegroup.studies.verification import consolidation, soil_cases, interface_cases  # noqa: F401
+from pilegroup.studies.verification import (  # noqa: F401
+    consolidation,
+    soil_cases,
+    interface_cases,
+    ground_cases,
+    downdrag_cases,
+)
 # isort: on
 
 from pilegroup.studies.verification.common import eval_points, shaft_profile_oscillation

@@ -14,7 +14,6 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
-from dolfinx import fem, geometry
 from dolfinx import mesh as dmesh
 from mpi4py import MPI
 
@@ -33,6 +32,7 @@ from pilegroup.solver import (
     SolverOptions,
     SolverStage,
 )
+from pilegroup.solver.probes import eval_points
 
 if TYPE_CHECKING:  # annotations only
     from pilegroup.solver import ElasticSolid, InterfaceCoupling, RigidPlate, SurfaceLoad
@@ -76,32 +76,6 @@ def world() -> MPI.Comm:
 def allsum[T: (int, float, np.ndarray)](comm: MPI.Comm, x: T) -> T:
     """``x`` summed over the ranks of ``comm`` (on every rank)."""
     return comm.allreduce(x, op=MPI.SUM)
-
-
-def eval_points(f: fem.Function, pts: np.ndarray) -> np.ndarray:
-    """Values of ``f`` at the points ``pts`` (``(n, 3)``, m), gathered on every rank.
-
-    Each point is evaluated in one of the cells owned by a rank that contains it; a point that
-    lies in cells of several ranks gets the mean of their values. Shape ``(n, bs)``, squeezed.
-    """
-    mesh = f.function_space.mesh
-    comm = mesh.comm
-    tree = geometry.bb_tree(mesh, mesh.topology.dim)
-    cand = geometry.compute_collisions_points(tree, pts)
-    coll = geometry.compute_colliding_cells(mesh, cand, pts)
-    nloc = mesh.topology.index_map(mesh.topology.dim).size_local
-    bs = f.function_space.dofmap.bs
-    vals = np.zeros((pts.shape[0], bs))
-    found = np.zeros(pts.shape[0])
-    for i in range(pts.shape[0]):
-        cells = coll.links(i)
-        cells = cells[cells < nloc]
-        if cells.size:
-            vals[i] = f.eval(pts[i], cells[:1])
-            found[i] = 1.0
-    vals = comm.allreduce(vals, op=MPI.SUM)
-    found = comm.allreduce(found, op=MPI.SUM)
-    return (vals / np.maximum(found, 1.0)[:, None]).squeeze()
 
 
 def p_along(problem: BiotProblem, z: np.ndarray, x: float, y: float) -> np.ndarray:

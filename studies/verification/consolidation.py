@@ -145,6 +145,10 @@ class TerzaghiColumn:
         """Coefficient of consolidation ``(k / gamma_w) / (S + 1/m)``, m^2/day."""
         return (self.soil.k / GAMMA_W) / (self.soil.material().storage + 1.0 / self.m_oed)
 
+    def settlement(self, T: float) -> float:
+        """Settlement (m) of the top at time factor ``T``: ``(q H - H p0 (1 - U(T))) / m``."""
+        return (self.q * self.H - self.H * self.p0 * (1.0 - terzaghi_degree(T))) / self.m_oed
+
     def problem(self, md: MeshData, disc: Discretisation,
                 options: SolverOptions | None = None) -> BiotProblem:
         """The column's problem on the box mesh ``md``."""
@@ -164,7 +168,7 @@ def _terzaghi_record(col: TerzaghiColumn, times: list[float], rows: list[dict[st
             e_p = float(np.sqrt(np.trapezoid((ph - pe) ** 2, zq) / np.trapezoid(pe**2, zq)))
             uz = eval_points(pb.u, np.array([[0.5, 0.5, 0.0]]))
             s_h = -float(np.atleast_1d(uz)[2])
-            s_e = (col.q * col.H - col.H * col.p0 * (1.0 - terzaghi_degree(T))) / col.m_oed
+            s_e = col.settlement(T)
             rows.append({"T_v": T, "t_day": t, "err_p": e_p, "settlement_m": s_h,
                          "settlement_ref_m": s_e, "err_s": abs(s_h - s_e) / s_e})
 

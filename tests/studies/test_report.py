@@ -58,6 +58,23 @@ def write_csv(path: Path, header: list[str], rows: list[list[object]]) -> None:
                     + "\n")
 
 
+def _ground_tables(out: Path, files: tuple[str, ...]) -> None:
+    """neutral_plane.csv, settlement_profiles.csv (piles 1, 5 and the free field), trough."""
+    depths = [0.5 + k for k in range(40)]
+    if "neutral_plane.csv" in files:
+        rows = [[t, p, 12.0, 150.0, 0.01, 1200.0, 1350.0, 0.012] for t in OUTPUT_DAYS
+                for p in (1, CENTRE)]
+        write_csv(out / "neutral_plane.csv", list(COLUMNS["neutral_plane.csv"]), rows)
+    if "settlement_profiles.csv" in files:
+        rows = [[t, p, z, 1200.0 + 10 * z - 0.4 * z * z, 0.012 - 1e-5 * z, 0.02 * (1 - z / 40)]
+                for t in OUTPUT_DAYS for p in (1, CENTRE) for z in depths]
+        rows += [[t, 0, z, "", "", 0.02 * (1 - z / 40)] for t in OUTPUT_DAYS for z in depths]
+        write_csv(out / "settlement_profiles.csv", list(COLUMNS["settlement_profiles.csv"]), rows)
+    if "surface_trough.csv" in files:
+        rows = [[t, x, 0.01 * (1 - abs(x) / 40)] for t in OUTPUT_DAYS for x in range(-40, 41, 4)]
+        write_csv(out / "surface_trough.csv", list(COLUMNS["surface_trough.csv"]), rows)
+
+
 def make_run(out: Path, slopes: dict[int, float] | None = None, shape: str = "early",
              files: tuple[str, ...] = tuple(COLUMNS), complete: bool = True) -> Path:
     """A run folder following the data contract (centre pile 5 and corner pile 1)."""
@@ -94,6 +111,7 @@ def make_run(out: Path, slopes: dict[int, float] | None = None, shape: str = "ea
         rows = [gauge_row(t, pile, s, z) for t in OUTPUT_DAYS for pile in (1, CENTRE)
                 for s, z in enumerate(GAUGE_DEPTHS, start=1)]
         write_csv(out / "gauges.csv", list(COLUMNS["gauges.csv"]), rows)
+    _ground_tables(out, files)
     (out / "summary.json").write_text(json.dumps({"scenario": "synthetic", "complete": complete,
                                                   "centre_pile": CENTRE}))
     return out

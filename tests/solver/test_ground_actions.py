@@ -1,0 +1,101 @@
+"""Ground actions of the solver: surcharge, water table and consolidating layers, 1D closed forms.
+
+Each runs a soil column (box, rollers, bottom fixed and impermeable, top drained) through
+``run_stages`` and compares the final or time-dependent settlement with the closed form of 1D
+consolidation (Terzaghi 1925; the oedometric modulus ``m``): a consolidating layer with
+``u0 = r |sigma'_v|`` settles by ``r gamma' H^2 / (2 m)``, a water table lowered by ``d`` by
+``gamma_w d H / m``.
+"""
+
+import numpy as np
+import pytest
+
+from pilegroup.constitutive.soil import LinearElastic
+from pilegroup.errors import SolverInputError
+from pilegroup.geometry import groups
+from pilegroup.geometry.box import build_box, graded_levels
+from pilegroup.solver import (
+    GAMMA_W,
+    BiotProblem,
+    Discretisation,
+    PressureBC,
+    SoilMaterial,
+    SolverOptions,
+    SolverStage,
+    StepControl,
+    run_stages,
+)
+from pilegroup.solver.probes import eval_points
+from pilegroup.studies.verification.common import ElasticSoil, box_bcs, world
+from pilegroup.studies.verification.consolidation import terzaghi_degree
+from pilegroup.studies.verification.ground_cases import consolidation_surcharge
+
+SOIL = ElasticSoil()
+H = 10.0
+M_OED = SOIL.E * (1 - SOIL.nu) / ((1 + SOIL.nu) * (1 - 2 * SOIL.nu))
+CV = (SOIL.k / GAMMA_W) / (SOIL.material().storage + 1.0 / M_OED)
+
+
+def _column(material, pressure_bcs):
+    md = build_box(world(), (0.0, 1.0), (0.0, 1.0), graded_levels(-H, 0.0, 12, ratio=4.0), 1, 1)
+    return BiotProblem(md, {groups.soil_layer(1): material}, Discretisation("Q2Q1"),
+                       displacement_bcs=box_bcs(), pressure_bcs=pressure_bcs,
+                       options=SolverOptions(preset="direct"))
+
+
+def _settlement(pb):
+    return -float(np.atleast_1d(eval_points(pb.u, np.array([[0.5, 0.5, 0.0]])))[2])
+
+
+def _steps(t_end):
+    return StepControl(dt0=1e-4 * t_end, dt_min=1e-12, dt_max=2e-2 * t_end,
+                       grow=10 ** (1 / 8), hold=1)
+
+
+def test_consolidating_layer_starts_in_equilibrium_and_settles_by_its_excess():
+    gamma, r = 18.0, 0.5
+    mat = SoilMaterial(LinearElastic(SOIL.E, SOIL.nu), SOIL.k, SOIL.porosity, gamma,
+                       excess_ratio=r)
+    pb = _column(mat, [PressureBC(groups.GROUND)])
+    T = 2.0
+    log = run_stages(pb, [SolverStage("geostatic", "geostatic"),
+                          SolverStage("consolidation", "consolidation", T * H**2 / CV)],
+                     _steps(T * H**2 / CV), geostatic_tol=1e-9)
+    assert log.geostatic_max_u < 1e-9  # the excess pore pressure carries its share of weight
+    # u0 = a d (d depth below the drained top, impermeable bottom): Terzaghi's series with
+    # A_m = 2 a H (-1)^m / M^2, so s(T) = a H^2 / (2 m) - sum 2 a H^2 (-1)^m / (m M^3) e^{-M^2 T}
+    a = r * (gamma - GAMMA_W)
+    M = np.pi * (2 * np.arange(200) + 1) / 2
+    s_e = a * H**2 / (2 * M_OED) - np.sum(2 * a * H**2 * (-1.0) ** np.arange(200)
+                                          / (M_OED * M**3) * np.exp(-M**2 * T))
+    assert _settlement(pb) == pytest.approx(s_e, rel=3e-3)
+
+
+def test_lowered_water_table_consolidates_the_layer():
+    drawdown, T = 2.0, 1.0
+    mat = SoilMaterial(LinearElastic(SOIL.E, SOIL.nu), SOIL.k, SOIL.porosity, 18.0)
+    pb = _column(mat, [PressureBC(groups.GROUND, value=-GAMMA_W, action=0)])
+    t_end = T * H**2 / CV
+    run_stages(pb, [SolverStage("geostatic", "geostatic"),
+                    SolverStage("pumping", "ground", 0.0, ground=(drawdown,)),
+                    SolverStage("consolidation", "consolidation", t_end)], _steps(t_end))
+    # an instantaneous drop of the drained boundary's pressure: Terzaghi's problem with
+    # p0 = -gamma_w d (the water compressibility is negligible at this modulus)
+    s_e = GAMMA_W * drawdown * H / M_OED * terzaghi_degree(T)
+    assert _settlement(pb) == pytest.approx(s_e, rel=1e-2)
+
+
+def test_ground_amplitudes_must_cover_every_action():
+    mat = SoilMaterial(LinearElastic(SOIL.E, SOIL.nu), SOIL.k, SOIL.porosity, 18.0)
+    pb = _column(mat, [PressureBC(groups.GROUND, value=-GAMMA_W, action=1)])
+    with pytest.raises(SolverInputError, match="ground amplitudes: 1 given"):
+        pb.set_ground((1.0,))
+    with pytest.raises(SolverInputError, match="kind 'ground'"):
+        SolverStage("x", "load", 1.0, ground=(1.0,))
+
+
+def test_consolidation_surcharge_case_within_its_tolerance():
+    r = consolidation_surcharge()
+    assert r.passed, r.line()
+    assert r.details["geostatic_max_u_m"] < 1e-9
+    assert len(r.details["rows"]) == 6
