@@ -59,11 +59,11 @@ STAGE_KEYS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
     "geostatic": ((), ()),
     "load": (("cap_load_kN", "duration_day"), ()),
     "consolidation": ((), ("until_day",)),
-    "surcharge": (("surcharge_kPa", "duration_day"), ("area_m", "under_cap")),
+    "surcharge": (("surcharge_kPa", "duration_day"), ("area_m",)),
     "groundwater": (("drawdown_m", "duration_day"), ()),
 }
 _STAGE_UNITS = {"cap_load_kN": "kN", "duration_day": "day", "until_day": "day",
-                "surcharge_kPa": "kPa", "area_m": "m", "under_cap": "-", "drawdown_m": "m"}
+                "surcharge_kPa": "kPa", "area_m": "m", "drawdown_m": "m"}
 
 
 @dataclass(frozen=True)
@@ -75,9 +75,9 @@ class Stage:
     (every action held until ``until_day``, or until ``time.end_day`` when omitted),
     ``surcharge`` (a pressure ``surcharge_kPa`` placed on the ground surface over
     ``duration_day``: a fill or an embankment, over the whole surface or the rectangle
-    ``area_m``, and held afterwards) or ``groundwater`` (the water table lowered by
-    ``drawdown_m`` over ``duration_day``, held afterwards). Every action keeps its value in the
-    stages that follow; docs/model.md ("Ground that moves") gives the physics.
+    ``area_m``, never beneath the cap, and held afterwards) or ``groundwater`` (the water
+    table lowered by ``drawdown_m`` over ``duration_day``, held afterwards). Every action keeps
+    its value in the stages that follow; docs/model.md ("Ground that moves") gives the physics.
     """
 
     name: str
@@ -93,9 +93,6 @@ class Stage:
     area_m: tuple[float, float, float, float] | None = None
     """Surcharge stage: the loaded rectangle ``[x_min, x_max, y_min, y_max]``, m, in the
     coordinates of the site (origin at the pile group's centre); default: the whole surface."""
-    under_cap: bool | None = None
-    """Surcharge stage: whether the pressure also acts inside the cap's footprint (default
-    false: a fill placed around a cap does not load the ground beneath it)."""
     drawdown_m: float | None = None
     """Groundwater stage: lowering of the water table, m (negative: the water table rises)."""
 

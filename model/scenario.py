@@ -161,10 +161,7 @@ class Scenario:
                 self._check_surcharge(i, st)
 
     def _check_surcharge(self, i: int, st: Stage) -> None:
-        """The loaded rectangle lies on the ground surface; ``under_cap`` needs a cap."""
-        if st.under_cap is not None and self.cap is None:
-            raise ScenarioError(f"stages[{i}].under_cap", st.under_cap,
-                                "only allowed when the scenario has a cap", "-")
+        """The loaded rectangle lies on the ground surface."""
         if st.area_m is None:
             return
         hx, hy = self.site.size_x_m / 2, self.site.size_y_m / 2

@@ -230,16 +230,10 @@ class FormBuilder:
 
 
 def _plan_window(mesh: dmesh.Mesh, ld: SurfaceLoad) -> ufl.core.expr.Expr | float:
-    """1 where load ``ld`` acts in plan (inside ``area``, outside ``outside``), else 0."""
-    x = ufl.SpatialCoordinate(mesh)
-
-    def inside(r: tuple[float, float, float, float]) -> ufl.core.expr.Expr:
-        return ufl.And(ufl.And(ufl.ge(x[0], r[0]), ufl.le(x[0], r[1])),
-                       ufl.And(ufl.ge(x[1], r[2]), ufl.le(x[1], r[3])))
-
-    w: ufl.core.expr.Expr | float = 1.0
-    if ld.area is not None:
-        w = ufl.conditional(inside(ld.area), 1.0, 0.0)
-    if ld.outside is not None:
-        w = w * ufl.conditional(inside(ld.outside), 0.0, 1.0)
-    return w
+    """1 where load ``ld`` acts in plan (inside its ``area``, or everywhere), else 0."""
+    if ld.area is None:
+        return 1.0
+    x, (x0, x1, y0, y1) = ufl.SpatialCoordinate(mesh), ld.area
+    inside = ufl.And(ufl.And(ufl.ge(x[0], x0), ufl.le(x[0], x1)),
+                     ufl.And(ufl.ge(x[1], y0), ufl.le(x[1], y1)))
+    return ufl.conditional(inside, 1.0, 0.0)

@@ -320,8 +320,8 @@ class SurfaceLoad:
     The load is ``load_factor * pressure`` when ``ramp`` is true, else constant; with
     ``action = i`` it is ``pressure`` times the amplitude of ground action ``i`` instead (set by
     the ground stages, :class:`SolverStage`). ``area`` ``(x_min, x_max, y_min, y_max)`` (m)
-    limits it to a rectangle of the facet group, ``outside`` leaves a rectangle out (e.g. a
-    cap's footprint); a facet cut by an edge of either carries the part inside (quadrature).
+    limits it to a rectangle of the facet group; a facet cut by its edge carries the part
+    inside (to the accuracy of the facet quadrature).
     """
 
     facet: str
@@ -329,7 +329,6 @@ class SurfaceLoad:
     ramp: bool = True
     action: int | None = None
     area: tuple[float, float, float, float] | None = None
-    outside: tuple[float, float, float, float] | None = None
 
 
 @dataclass(frozen=True)

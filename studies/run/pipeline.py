@@ -163,14 +163,11 @@ def ground_actions(sc: Scenario) -> list[Stage]:
 def surcharge_loads(sc: Scenario) -> list[SurfaceLoad]:
     """One load on the ground surface per surcharge stage (its ground action's amplitude 0 -> 1).
 
-    Without ``under_cap`` the cap's footprint is left out (a fill placed around the cap).
+    The ground surface group does not hold the cap's footprint (``cap_bottom``): a fill is
+    placed around a cap, never beneath it.
     """
-    cap = None
-    if sc.cap is not None:
-        cx, cy = sc.cap.size_x_m / 2, sc.cap.size_y_m / 2
-        cap = (-cx, cx, -cy, cy)
     return [SurfaceLoad(groups.GROUND, st.surcharge_kPa, action=i,  # type: ignore[arg-type]
-                        area=st.area_m, outside=None if st.under_cap else cap)
+                        area=st.area_m)
             for i, st in enumerate(ground_actions(sc))]
 
 

@@ -22,7 +22,7 @@ def _with(stages=(), **layer1):
 
 
 def test_ground_stages_map_onto_ground_actions():
-    embankment = dict(FILL, name="embankment", area_m=[10.0, 30.0, -20.0, 20.0], under_cap=True)
+    embankment = dict(FILL, name="embankment", area_m=[10.0, 30.0, -20.0, 20.0])
     sc = scenario_from_dict(_with([FILL, PUMP, embankment], excess_pore_pressure_ratio=0.3))
     times = {st.name: (a, b) for st, a, b in sc.stage_times()}
     assert times["fill"] == (0.0, 10.0) and times["pumping"] == (10.0, 15.0)
@@ -32,9 +32,8 @@ def test_ground_stages_map_onto_ground_actions():
     assert stages["pumping"].ground == (1.0, 0.0, 2.0)  # drawdown so far (m), last action
     assert stages["embankment"].ground == (1.0, 1.0, 2.0)
     loads = surcharge_loads(sc)
-    half_x, half_y = sc.cap.size_x_m / 2, sc.cap.size_y_m / 2
-    assert loads[0].outside == (-half_x, half_x, -half_y, half_y) and loads[0].area is None
-    assert loads[1].outside is None and loads[1].area == (10.0, 30.0, -20.0, 20.0)
+    assert loads[0].area is None and loads[1].area == (10.0, 30.0, -20.0, 20.0)
+    assert [ld.action for ld in loads] == [0, 1]
     assert ground_drainage(sc).action == 2 and ground_drainage(sc).value == pytest.approx(-9.81)
     assert sc.layers[1].excess_pore_pressure_ratio == 0.3
 
