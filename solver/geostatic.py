@@ -11,7 +11,8 @@ A layer still consolidating starts with an excess pore pressure ``u0(z) >= 0``
 weight, so the effective stress is that of the soil at the current stress,
 ``sigma'_v + u0`` vertically and ``K0 (sigma'_v + u0)`` horizontally, and the total stress
 (effective minus ``u0``) is ``sigma'_v`` vertically and ``K0 (sigma'_v + u0) - u0``
-horizontally; solids and the interface take that total stress. Every term depends on ``z``
+horizontally; solids take that total stress, the interface law its effective part (the
+excess pore pressure acts on the pile besides the law's traction). Every term depends on ``z``
 only, so the state is in equilibrium. ``u0`` is used as the piecewise-linear interpolant
 through the pressure nodes' elevations (:meth:`SoilColumn.set_excess_levels`), the same
 function the pressure field holds, so that the discrete state starts in equilibrium too.
@@ -142,14 +143,15 @@ class SoilColumn:
     def interface_traction(self, z: np.ndarray, soil_group: str | None) -> np.ndarray:
         """In-situ local interface traction ``[sigma_n, 0, 0]`` (kPa) at heights ``z``.
 
-        Shafts (``soil_group`` the adjacent soil layer): ``K0 (sigma'_v + u0) - u0``; bases
-        (``soil_group = None``): ``sigma'_v`` (the soil's total stress, module doc).
+        The interface law carries the effective traction (the excess pore pressure acts on the
+        pile besides it, ``solver/forms.py::interface``): shafts (``soil_group`` the adjacent
+        soil layer) ``K0 (sigma'_v + u0)``, bases (``soil_group = None``) ``sigma'_v + u0``.
         """
         sv, u0 = self.sigma_v(z), self.excess(z)
         t = np.zeros((z.size, 3))
         if soil_group is None:
-            t[:, 0] = sv
+            t[:, 0] = sv + u0
         else:
             layer = self.by_name.get(soil_group)
-            t[:, 0] = (layer.k0 if layer is not None else self.k0(z)) * (sv + u0) - u0
+            t[:, 0] = (layer.k0 if layer is not None else self.k0(z)) * (sv + u0)
         return t
