@@ -49,6 +49,8 @@ class RunSummary(SolverSummary, total=False):
     """The linear-solver preset chosen (``auto`` resolved)."""
     gauge_sections: list[dict[str, Any]] | None
     """Virtual strain-gauge sections (``GaugeProbe.summary``), or None without gauges."""
+    neutral_plane: list[dict[str, float]]
+    """Every pile's row of ``neutral_plane.csv`` at the last output time (column names)."""
     settlement_m: list[SettlementRecord]
     settlement_sign: str
     resumed_from_day: float | None
