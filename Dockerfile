@@ -3,7 +3,7 @@
 FROM debian:unstable-slim
 RUN apt-get update \
  && apt-get install -y --no-install-recommends \
-      python3-dolfinx python3-gmsh python3-pyvista python3-h5py python3-matplotlib \
+      python3-dolfinx python3-gmsh python3-pyvista python3-h5py python3-matplotlib python3-scipy \
       python3-tqdm python3-pytest python3-hypothesis python3-pip python3-setuptools \
       mpich make \
  && rm -rf /var/lib/apt/lists/*
