@@ -72,8 +72,11 @@ def test_neutral_plane_at_a_kink_is_within_a_station_spacing(n):
     z = np.linspace(0.0, L_PILE, n)
     N = unified_force_profile(z, U_PILE, lambda s: 2.0 * s, Q_HEAD, bal.depth_m)
     npl = neutral_plane(z, N, 0 * z, 0 * z)
-    assert abs(npl.depth_m - bal.depth_m) < z[1] - z[0]
-    assert npl.max_force_kN == pytest.approx(bal.max_force_kN, rel=(z[1] - z[0]) / L_PILE)
+    h = z[1] - z[0]
+    assert abs(npl.depth_m - bal.depth_m) < h  # measured 0.033, 0.022, 0.0006 m
+    # the parabola cuts the corner: less than half a spacing of the slope U f(zn) = U 2 zn
+    # (measured -2.6, -2.5, -2.0 kN)
+    assert abs(npl.max_force_kN - bal.max_force_kN) < U_PILE * 2.0 * bal.depth_m * h / 2
 
 
 def test_no_negative_friction_puts_the_neutral_plane_at_the_head():
