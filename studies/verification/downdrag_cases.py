@@ -34,6 +34,7 @@ import numpy as np
 from mpi4py import MPI
 
 from pilegroup.model import scenario_from_dict
+from pilegroup.studies.results.downdrag import end_bearing_force, force_balance
 from pilegroup.studies.results.tables import (
     NEUTRAL_PLANE_CSV,
     SETTLEMENT_PROFILES_CSV,
@@ -50,6 +51,8 @@ __all__ = ["downdrag_end_bearing", "downdrag_floating", "downdrag_scenario"]
 Q_KN, Q_SURCHARGE, D, L, C_SOFT = 300.0, 100.0, 1.0, 12.0, 10.0
 #: The shaft strength of the soft clay's interface (default Eq. 15, phi = 0): 2 c / sqrt 3.
 TAU_F = 2.0 * C_SOFT / math.sqrt(3.0)
+#: The mobilised shaft friction of the unified method (kPa): the strength at every depth.
+SHAFT_FRICTION = (np.array([0.0, L]), np.array([TAU_F, TAU_F]))
 _SOFT = {"name": "soft_clay", "gamma_kN_per_m3": 17.0, "E_MPa": 2.0, "nu": 0.3, "phi_deg": 0.0,
          "c_kPa": C_SOFT, "k_m_per_day": 1e-3, "e0": 1.2,
          "interface": {"delta_deg": 10.0, "K": 1000.0, "n": 0.0, "R_f": 0.0,
@@ -131,7 +134,7 @@ def downdrag_end_bearing(size: str = "fast", comm: MPI.Comm | None = None) -> Ca
     tables, n = _run(downdrag_scenario(True, size), comm)
     plane = _last(tables[NEUTRAL_PLANE_CSV], 1)
     n_max = float(plane["max_axial_force_kN"][0])
-    ref = Q_KN + math.pi * D * TAU_F * 10.0
+    ref = end_bearing_force(Q_KN, math.pi * D, SHAFT_FRICTION, 10.0)
     err = abs(n_max - ref) / ref
     tol = 0.05
     return CaseResult(
@@ -172,7 +175,7 @@ def downdrag_floating(size: str = "fast", comm: MPI.Comm | None = None) -> CaseR
 
     last = _last(prof, 1)
     toe = float(last["axial_force_kN"][np.argmax(last["depth_m"])])  # the toe's share
-    zn_ref = (L - (Q_KN - toe) / (math.pi * D * TAU_F)) / 2.0
+    zn_ref = force_balance(L, math.pi * D, SHAFT_FRICTION, Q_KN, toe).depth_m
     ds_pile = at(t_b, "pile_settlement_m") - at(t_a, "pile_settlement_m")
     ds_soil = at(t_b, "soil_settlement_m") - at(t_a, "soil_settlement_m")
     err_zn = abs(zn - zn_ref) / L
