@@ -56,12 +56,14 @@ class GroundProbe:
     """
 
     def __init__(self, sc: Scenario, pb: BiotProblem, piles: PileProbe, out: Path) -> None:
-        self.sc, self.pb, self.piles, self.out = sc, pb, piles, Path(out)
+        self.piles, self.out = piles, Path(out)
         self.comm = pb.comm
         soil = pb.body("soil")
         x = soil.mesh.geometry.x
-        lo = [self.comm.allreduce(float(x[:, k].min()), op=MPI.MIN) for k in range(2)]
-        hi = [self.comm.allreduce(float(x[:, k].max()), op=MPI.MAX) for k in range(2)]
+        lo = [self.comm.allreduce(float(x[:, k].min(initial=np.inf)), op=MPI.MIN)
+              for k in range(2)]
+        hi = [self.comm.allreduce(float(x[:, k].max(initial=-np.inf)), op=MPI.MAX)
+              for k in range(2)]
         inset = [1e-6 * (b - a) for a, b in zip(lo, hi, strict=True)]
         corners = [(cx, cy) for cx in (lo[0] + inset[0], hi[0] - inset[0])
                    for cy in (lo[1] + inset[1], hi[1] - inset[1])]
