@@ -240,9 +240,9 @@ class TimeStepping:
 class LinearSolver:
     """PETSc linear solver: a named preset merged with user ``options``.
 
-    ``options`` are PETSc option names without the problem prefix. ``auto`` picks ``direct``
-    for small problems and ``direct_reuse`` for larger ones (the presets measured to converge on
-    the pier system at every size; ``studies.pier.auto_preset``); a failing ``fieldsplit_gamg``
+    ``options`` are PETSc option names without the problem prefix. ``auto`` picks ``direct`` for
+    small problems and ``direct_reuse`` for larger ones (the presets measured to converge on the
+    pier system at every size; ``studies.run.pipeline.auto_preset``); a failing ``fieldsplit_gamg``
     or ``fieldsplit_pier`` falls back to ``direct_reuse``.
     """
 
