@@ -55,6 +55,12 @@ BOUNDS: dict[str, Bound] = {
                                                hi_open=True),
     "layers.excess_pore_pressure_kPa": Bound(0.0, 1000.0, "kPa",
                                              "fills up to ~50 m high leave at most ~1000 kPa"),
+    "piles.installation.radius_ratio": Bound(1.0, 100.0, "-",
+                                             "cavity expansion: R/r0 = sqrt(G/c_u), ~5-20 in"
+                                             " soft clay", lo_open=True),
+    "piles.installation.excess_pore_pressure_ratio": Bound(0.0, 1.0, "-",
+                                                           "1 would leave the soil without"
+                                                           " effective stress", hi_open=True),
     "layers.interface.K": Bound(1.0, 1.0e5, "-",
                                 "Clough-Duncan modulus numbers of soils ~50-5000 (paper: 296-820)"),
     "layers.interface.n": Bound(0.0, 2.0, "-", "Clough-Duncan exponents ~0.2-1 (paper: 0.28-0.52)"),

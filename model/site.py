@@ -205,6 +205,31 @@ class Site(_PlanRectangle):
 
 
 @dataclass(frozen=True)
+class Installation:
+    """Excess pore pressure the piles' installation leaves in the soil around each shaft.
+
+    Cylindrical cavity expansion (docs/model.md, "Installation pore pressures"): at a distance
+    ``r`` from a pile's axis, ``u = u_s ln(R/r) / ln(R/r0)`` for ``r0 <= r <= R`` (``r0`` the
+    pile radius, ``R = radius_ratio r0``), 0 beyond and below the toe; the fields of the piles
+    add up. At the shaft ``u_s = excess_pore_pressure_ratio x sigma'_v``: the undrained
+    strength of a normally consolidated clay, and with it the cavity pressure, grows with the
+    vertical effective stress.
+    """
+
+    excess_pore_pressure_ratio: float
+    """``u_s / sigma'_v`` at the shaft, in (0, 1)."""
+    radius_ratio: float
+    """``R / r0``: the radius of the disturbed zone over the pile radius (> 1)."""
+
+    def __post_init__(self) -> None:
+        require_positive("excess_pore_pressure_ratio", self.excess_pore_pressure_ratio, "-")
+        check_bound("piles.installation.excess_pore_pressure_ratio",
+                    self.excess_pore_pressure_ratio)
+        require_finite("radius_ratio", self.radius_ratio, "-")
+        check_bound("piles.installation.radius_ratio", self.radius_ratio)
+
+
+@dataclass(frozen=True)
 class Piles:
     """The piles: a regular grid centred on the cap, or explicit positions.
 
@@ -218,6 +243,8 @@ class Piles:
     grid: tuple[int, int] | None = None
     spacing_m: tuple[float, float] | None = None
     positions_m: tuple[tuple[float, float], ...] | None = None
+    installation: Installation | None = None
+    """Installation pore pressures present at the start (None: wished in place, no excess)."""
 
     def __post_init__(self) -> None:
         require_positive("diameter_m", self.diameter_m, "m")

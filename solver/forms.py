@@ -82,7 +82,8 @@ def projection_tau(K: float, G: float) -> float:
 class Coefficients:
     """Cell-wise (DG0, parent mesh) material coefficients of the soil terms.
 
-    ``S`` storage (1/kPa), ``mob`` mobility k/GAMMA_W (m^2/(kPa day)), ``gam`` buoyant unit
+    ``S`` storage (1/kPa), ``mob`` mobility k/GAMMA_W (m^2/(kPa day); the vertical one when a
+    layer is anisotropic, ``mob_h`` then the horizontal one, else ``None``), ``gam`` buoyant unit
     weight (kN/m^3; solids take that of the layer they replace), ``tau`` stabilisation
     ``stab_factor * projection_tau(K, G)`` (1/kPa), ``beta`` fixed-stress ``1/K`` (1/kPa); the
     moduli are those of each material's elastic part (the elastic moduli of a plastic soil).
@@ -92,6 +93,10 @@ class Coefficients:
         mesh, md = layout.mesh, layout.md
         D0 = fem.functionspace(mesh, ("DG", 0))
         self.S, self.mob, self.gam, self.tau, self.beta = (fem.Function(D0) for _ in range(5))
+        soils = [m for m in layout.materials.values() if isinstance(m, SoilMaterial)]
+        # horizontal mobility, only when a layer is anisotropic (else ``mob`` acts everywhere)
+        self.mob_h = fem.Function(D0) if any(m.k_h_m_per_day is not None for m in soils) \
+            else None
         for name, mat in layout.materials.items():
             cells = md.cell_tags.find(md.cell_tag(name))
             if not isinstance(mat, SoilMaterial):
@@ -101,6 +106,8 @@ class Coefficients:
             K, G = mat.elastic_moduli()
             self.S.x.array[cells] = mat.storage
             self.mob.x.array[cells] = mat.mobility
+            if self.mob_h is not None:
+                self.mob_h.x.array[cells] = mat.mobility_h
             self.gam.x.array[cells] = mat.gamma_sat - GAMMA_W
             self.tau.x.array[cells] = disc.stab_factor * projection_tau(K, G)
             self.beta.x.array[cells] = 1.0 / K
@@ -168,9 +175,15 @@ class FormBuilder:
         p, p_n, u, u_n = lay.p, lay.p_n, lay.fields[0], lay.fields_n[0]
         dx = self.dx
         self.forms.add_F(1, (c.S * (p - p_n) + ufl.div(u - u_n)) * q * dx
-                         + c.dt * c.mob * ufl.inner(ufl.grad(p), ufl.grad(q)) * dx)
-        self.forms.add_J(1, 1, c.S * dp * q * dx
-                         + c.dt * c.mob * ufl.inner(ufl.grad(dp), ufl.grad(q)) * dx)
+                         + c.dt * self._darcy(p, q) * dx)
+        self.forms.add_J(1, 1, c.S * dp * q * dx + c.dt * self._darcy(dp, q) * dx)
+
+    def _darcy(self, p: ufl.core.expr.Expr, q: ufl.core.expr.Expr) -> ufl.core.expr.Expr:
+        """``mob grad p . grad q``; with anisotropic layers ``mob_h`` acts in x and y."""
+        c, gp, gq = self.coef, ufl.grad(p), ufl.grad(q)
+        if c.mob_h is None:
+            return c.mob * ufl.inner(gp, gq)
+        return c.mob_h * (gp[0] * gq[0] + gp[1] * gq[1]) + c.mob * gp[2] * gq[2]
 
     def stabilisation(self) -> None:
         """Polynomial pressure projection of the equal-order pair (full minus one-point mass).

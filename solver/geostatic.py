@@ -16,6 +16,14 @@ excess pore pressure acts on the pile besides the law's traction). Every term de
 only, so the state is in equilibrium. ``u0`` is used as the piecewise-linear interpolant
 through the pressure nodes' elevations (:meth:`SoilColumn.set_excess_levels`), the same
 function the pressure field holds, so that the discrete state starts in equilibrium too.
+
+The piles' installation adds an excess pore pressure ``u_i(x)`` around each shaft
+(:class:`~pilegroup.solver.inputs.InstallationExcess`: a fraction of ``|sigma'_v|`` at the
+shaft, shaped by the cavity expansion's logarithm). The total stress is held: the
+effective stress of the soil is less compressive by ``u_i`` in every direction, solids keep
+their total stress and the interface law starts at the effective traction less ``u_i``. The
+soil's share is evaluated at the quadrature points as the pressure space's interpolant of
+``u_i`` (passed to :meth:`SoilColumn.stress`), so this state too is in discrete equilibrium.
 """
 
 from __future__ import annotations
@@ -26,8 +34,9 @@ from dataclasses import dataclass
 import numpy as np
 from mpi4py import MPI
 
+from pilegroup.errors import SolverInputError
 from pilegroup.geometry.meshdata import MeshData
-from pilegroup.solver.inputs import GAMMA_W, ElasticSolid, SoilMaterial
+from pilegroup.solver.inputs import GAMMA_W, ElasticSolid, InstallationExcess, SoilMaterial
 from pilegroup.solver.qpstate import QuadratureState
 
 
@@ -49,10 +58,12 @@ class SoilColumn:
     Args:
         md: mesh and tags.
         materials: cell-group name -> material; the :class:`SoilMaterial` groups are the layers.
+        installation: the piles' installation pore pressures (None: none).
     """
 
-    def __init__(self, md: MeshData, materials: Mapping[str, SoilMaterial | ElasticSolid]
-                 ) -> None:
+    def __init__(self, md: MeshData, materials: Mapping[str, SoilMaterial | ElasticSolid],
+                 installation: InstallationExcess | None = None) -> None:
+        self.installation = installation
         comm = md.mesh.comm
         gx = md.mesh.geometry.x
         cdm = md.mesh.geometry.dofmaps[0]
@@ -102,6 +113,39 @@ class SoilColumn:
             raise RuntimeError("SoilColumn.set_excess_levels was not called")
         return np.interp(z, *self._levels)
 
+    def installation_excess(self, x: np.ndarray) -> np.ndarray:
+        """Installation excess pore pressure (kPa, >= 0) at points ``x`` ((n, 3), m)."""
+        x = np.asarray(x, dtype=float).reshape(-1, 3)
+        if self.installation is None:
+            return np.zeros(x.shape[0])
+        return self.installation.ratio * -self.sigma_v(x[:, 2]) * self.installation.shape(x)
+
+    def check_installation(self, x: np.ndarray, comm: MPI.Comm) -> None:
+        """The installation leaves the horizontal effective stress compressive at points ``x``.
+
+        ``u_i < K0 |sigma'_v + u0|`` at every pressure node; else :class:`SolverInputError`
+        naming the largest ratio ``u_i / (K0 |sigma'_v + u0|)`` and where (collective).
+        """
+        if self.installation is None:
+            return
+        x = np.asarray(x, dtype=float).reshape(-1, 3)
+        ui = self.installation_excess(x)
+        z = np.clip(x[:, 2], min(lay.z_min for lay in self.layers), self.z_top)  # round-off
+        room = self.k0(z) * -(self.sigma_v(z) + self.excess(z))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            q = np.where(ui > 0.0, ui / room, 0.0)
+        q = np.where((ui > 0.0) & (room <= 0.0), np.inf, q)
+        k = int(np.argmax(q)) if q.size else -1
+        worst = (float(q[k]), *map(float, x[k])) if k >= 0 else (0.0, 0.0, 0.0, 0.0)
+        worst = max(comm.allgather(worst))
+        if worst[0] >= 1.0:
+            raise SolverInputError(
+                f"piles.installation.excess_pore_pressure_ratio = {self.installation.ratio:g}:"
+                f" the installation pore pressure reaches {worst[0]:.3g} times the horizontal"
+                f" effective stress K0 |sigma'_v| at x = {worst[1]:.3g}, y = {worst[2]:.3g},"
+                f" z = {worst[3]:.3g} m (the fields of neighbouring piles add up); allowed: < 1"
+                " everywhere (the soil would start with tensile effective stress)")
+
     def sigma_v(self, z: np.ndarray) -> np.ndarray:
         """Vertical geostatic effective stress (kPa, negative) at elevations ``z`` (m)."""
         s = np.zeros_like(z)
@@ -124,8 +168,13 @@ class SoilColumn:
             out[(z >= lay.z_min) & (z <= lay.z_max)] = getattr(lay, key)
         return out
 
-    def stress(self, states: Sequence[QuadratureState]) -> dict[str, np.ndarray]:
-        """K0 effective stress at the quadrature points of each group (Mandel, kPa)."""
+    def stress(self, states: Sequence[QuadratureState],
+               installation: Mapping[str, np.ndarray] | None = None) -> dict[str, np.ndarray]:
+        """K0 effective stress at the quadrature points of each group (Mandel, kPa).
+
+        ``installation[name]``: the installation excess pore pressure at the group's points
+        (the pressure space's interpolant), taken off the soil's effective stress.
+        """
         out = {}
         for g in (g for qp in states for g in qp.groups):
             z = g.x[:, 2]
@@ -134,24 +183,36 @@ class SoilColumn:
             if isinstance(g.material, SoilMaterial):  # effective stress
                 s[:, 0] = s[:, 1] = g.material.k0 * (sv + u0)
                 s[:, 2] = sv + u0
+                if installation is not None and g.name in installation:
+                    s[:, :3] += installation[g.name][:, None]
             else:  # a solid takes the total stress of the soil it replaces
                 s[:, 0] = s[:, 1] = self.k0(z) * (sv + u0) - u0
                 s[:, 2] = sv
             out[g.name] = s
         return out
 
-    def interface_traction(self, z: np.ndarray, soil_group: str | None) -> np.ndarray:
-        """In-situ local interface traction ``[sigma_n, 0, 0]`` (kPa) at heights ``z``.
+    def interface_traction(self, x: np.ndarray, z: np.ndarray, soil_group: str | None
+                           ) -> np.ndarray:
+        """In-situ local interface traction ``[sigma_n, 0, 0]`` (kPa) at points ``x`` ((n, 3)).
 
-        The interface law carries the effective traction (the excess pore pressure acts on the
-        pile besides it, ``solver/forms.py::interface``): shafts (``soil_group`` the adjacent
-        soil layer) ``K0 (sigma'_v + u0)``, bases (``soil_group = None``) ``sigma'_v + u0``.
+        The interface law carries the effective traction, the soil's total traction plus the
+        excess pore pressure, which acts on the pile beside it (``solver/forms.py::interface``):
+        shafts (``soil_group`` the adjacent soil layer) ``K0 (sigma'_v + u0) + u_i``, bases
+        (``soil_group = None``) ``sigma'_v + u0 + u_i`` (``u0`` the layers', ``u_i`` the
+        installation's excess pore pressure). The total traction, linear in depth, is taken at
+        the heights ``z`` (the interface's weighted heights: a consistent resultant), the excess
+        pore pressure at the points ``x`` themselves, where the interface integrates the
+        pressure beside the law, so that the two cancel in the discrete equilibrium too.
         """
-        sv, u0 = self.sigma_v(z), self.excess(z)
+        x = np.asarray(x, dtype=float).reshape(-1, 3)
+        z = np.asarray(z, dtype=float)
+        sv, u0, u0_x = self.sigma_v(z), self.excess(z), self.excess(x[:, 2])
         t = np.zeros((z.size, 3))
         if soil_group is None:
-            t[:, 0] = sv + u0
+            t[:, 0] = sv + u0_x
         else:
             layer = self.by_name.get(soil_group)
-            t[:, 0] = (layer.k0 if layer is not None else self.k0(z)) * (sv + u0)
+            k0 = layer.k0 if layer is not None else self.k0(z)
+            t[:, 0] = k0 * (sv + u0) - u0 + u0_x
+        t[:, 0] += self.installation_excess(x)
         return t

@@ -41,6 +41,8 @@ class SoilMaterial:
         excess_ratio: excess pore pressure at the start as a fraction of the vertical
             effective stress it will carry once dissipated, in [0, 1) (under-consolidated).
         excess_kPa: excess pore pressure at the start, kPa, uniform over the group.
+        k_h_m_per_day: horizontal hydraulic conductivity, m/day (``None``: isotropic,
+            ``k_m_per_day`` then acts in every direction; else that one is the vertical).
     """
 
     law: ConstitutiveLaw
@@ -51,10 +53,13 @@ class SoilMaterial:
     K_w: float = K_WATER
     excess_ratio: float = 0.0
     excess_kPa: float = 0.0
+    k_h_m_per_day: float | None = None
 
     def __post_init__(self) -> None:
         err = SolverInputError
         require_non_negative("k_m_per_day", self.k_m_per_day, "m/day", error=err)
+        if self.k_h_m_per_day is not None:
+            require_non_negative("k_h_m_per_day", self.k_h_m_per_day, "m/day", error=err)
         require_in_range("porosity", self.porosity, 0.0, 1.0, "-", hi_open=True, error=err)
         require_non_negative("gamma_sat", self.gamma_sat, "kN/m^3", error=err)
         require_positive("K_w", self.K_w, "kPa", error=err)
@@ -73,8 +78,14 @@ class SoilMaterial:
 
     @property
     def mobility(self) -> float:
-        """Mobility k / GAMMA_W, m^2/(kPa day)."""
+        """Mobility k / GAMMA_W, m^2/(kPa day) (the vertical one when anisotropic)."""
         return self.k_m_per_day / GAMMA_W
+
+    @property
+    def mobility_h(self) -> float:
+        """Horizontal mobility k_h / GAMMA_W, m^2/(kPa day)."""
+        k = self.k_m_per_day if self.k_h_m_per_day is None else self.k_h_m_per_day
+        return k / GAMMA_W
 
     @property
     def k0(self) -> float:
@@ -123,6 +134,46 @@ class ElasticSolid:
 
 
 @dataclass(frozen=True)
+class InstallationExcess:
+    """Excess pore pressure left by the piles' installation (cylindrical cavity expansion).
+
+    At distance ``r`` from a pile's axis and depth above its toe, ``u = ratio |sigma'_v(z)|
+    ln(R/r) / ln(R/r0)`` for ``r0 <= r <= R = radius_ratio r0`` (1 at ``r <= r0``, 0 beyond
+    ``R``); the piles' fields add up (docs/model.md, "Installation pore pressures").
+
+    Attributes:
+        piles: ``(x, y, r0, z_toe)`` of every pile of the whole foundation (m; the mirror
+            images a reduced model leaves out included).
+        ratio: ``u / |sigma'_v|`` at the shaft, in (0, 1).
+        radius_ratio: ``R / r0`` (> 1).
+    """
+
+    piles: tuple[tuple[float, float, float, float], ...]
+    ratio: float
+    radius_ratio: float
+
+    def __post_init__(self) -> None:
+        err = SolverInputError
+        require_in_range("ratio", self.ratio, 0.0, 1.0, "-", lo_open=True, hi_open=True,
+                         error=err)
+        if not self.radius_ratio > 1.0:
+            raise SolverInputError(f"InstallationExcess.radius_ratio = {self.radius_ratio!r};"
+                                   " allowed: > 1")
+        for i, (_, _, r0, _) in enumerate(self.piles):
+            require_positive(f"piles[{i}] radius", r0, "m", error=err)
+
+    def shape(self, x: np.ndarray) -> np.ndarray:
+        """``sum_i ln(R/r_i) / ln(R/r0_i)`` at points ``x`` ((n, 3), m), 0 below each toe."""
+        x = np.asarray(x, dtype=float).reshape(-1, 3)
+        out = np.zeros(x.shape[0])
+        for px, py, r0, z_toe in self.piles:
+            r = np.clip(np.hypot(x[:, 0] - px, x[:, 1] - py), r0, self.radius_ratio * r0)
+            f = np.log(self.radius_ratio * r0 / r) / math.log(self.radius_ratio)
+            out += np.where(x[:, 2] >= z_toe - 1e-9, f, 0.0)
+        return out
+
+
+@dataclass(frozen=True)
 class InterfaceCoupling:
     """Piles and cap on their own displacement field, joined to the soil by an interface.
 
@@ -131,9 +182,12 @@ class InterfaceCoupling:
             ``[opening, slip1, slip2]``): ``laws[j]`` for the pile shafts in soil layer ``j``
             (0-based) and ``laws[L + j]`` for pile bases in layer ``j``; ``None`` where no facet
             exists. ``L`` is the number of ``soil_layer_NN`` groups.
-        traction0: ``traction0(z, m) -> (n, 3)`` initial local traction ``[sigma_n, tau1,
-            tau2]`` (kPa, compression negative) of group ``m`` at heights ``z``; ``None`` gives
-            the in-situ state: ``K0 sigma'_v(z)`` on shafts, ``sigma'_v(z)`` on bases.
+        traction0: ``traction0(x, z, m) -> (n, 3)`` initial local traction ``[sigma_n, tau1,
+            tau2]`` (kPa, compression negative) of group ``m`` at the law's points ``x`` ((n, 3),
+            m), a stress linear in depth taken at the heights ``z`` (nodal quadrature: the
+            nodes' weighted heights; Gauss: the points'); ``None`` gives the in-situ state:
+            ``K0 sigma'_v`` on shafts, ``sigma'_v`` on bases, with the excess pore pressures at
+            the start (docs/model.md).
         quadrature: where the law is evaluated and its state lives: ``"nodal"`` (the interface
             nodes, Gauss-Lobatto rule; any degree) or ``"gauss"`` (the 2 x 2 Gauss points of
             every interface facet, consistent facet tangent; Q1 displacements only). The
@@ -141,7 +195,7 @@ class InterfaceCoupling:
     """
 
     laws: tuple[ConstitutiveLaw | None, ...]
-    traction0: Callable[[np.ndarray, int], np.ndarray] | None = None
+    traction0: Callable[[np.ndarray, np.ndarray, int], np.ndarray] | None = None
     quadrature: Literal["nodal", "gauss"] = "nodal"
 
     def __post_init__(self) -> None:

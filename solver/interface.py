@@ -105,8 +105,9 @@ class NodalInterface:
         V_soil: displacement space on ``split.soil`` (same element).
         laws: one interface law per group: ``laws[j]`` for the shaft in layer ``j`` and
             ``laws[L + j]`` for pile bases in layer ``j`` (``None`` where no facet exists).
-        traction0: ``traction0(z, m) -> (n, 3)`` initial local traction ``[sigma_n, tau1, tau2]``
-            (kPa, compression negative) of group ``m`` at node heights ``z`` (m).
+        traction0: ``traction0(x, z, m) -> (n, 3)`` initial local traction ``[sigma_n, tau1,
+            tau2]`` (kPa, compression negative) of group ``m`` at the nodes ``x`` ((n, 3), m),
+            a stress linear in depth taken at the heights ``z`` (the nodes' weighted heights).
     """
 
     #: Where the law is evaluated (``InterfaceCoupling.quadrature``).
@@ -116,7 +117,7 @@ class NodalInterface:
 
     def __init__(self, md: MeshData, split: BodySplit, V_struct: fem.FunctionSpace,
                  V_soil: fem.FunctionSpace, laws: Sequence[ConstitutiveLaw | None],
-                 traction0: Callable[[np.ndarray, int], np.ndarray]) -> None:
+                 traction0: Callable[[np.ndarray, np.ndarray, int], np.ndarray]) -> None:
         self.split = split
         self.V_struct, self.V_soil = V_struct, V_soil
         L = split.n_layers
@@ -129,6 +130,7 @@ class NodalInterface:
         self.dS = ufl.Measure("dS", domain=md.mesh, subdomain_data=ents,
                               metadata={"quadrature_rule": "GLL",
                                         "quadrature_degree": 2 * degree - 1})
+        self._entities = (md.mesh, ents)
         self.entity_maps = [split.structure_map, split.soil_map]
         soil = split.soil
         # Nodal weights per group: W[i, m] = int_{group m} phi_i dS, one assembly for all groups.
@@ -183,7 +185,8 @@ class NodalInterface:
         # Consistent initial tractions: traction0 is linear in z within a group, so its
         # phi_i-weighted mean over the group's facets is its value at the weighted height
         # zbar[i, m] = int_m z phi_i dS / W[i, m] (Gauss rule here: exact), and the lumped
-        # (nodal) interface force then equals int_m traction0 phi_i dS exactly.
+        # (nodal) interface force then equals int_m traction0 phi_i dS exactly; a pressure
+        # integrated as the lumped pressure term is, at the node itself (traction0's x).
         dS_gauss = ufl.Measure("dS", domain=md.mesh, subdomain_data=ents,
                                metadata={"quadrature_degree": 2 * degree + 1})
         zc = ufl.SpatialCoordinate(md.mesh)[2]
@@ -205,7 +208,8 @@ class NodalInterface:
             R = self._frames(N[nodes], base=m >= L)
             law = self.laws[m]
             zbar = Zw[nodes, m] / self.W[nodes, m]
-            state = law.initial_state(nodes.size, traction0(zbar, m)) if nodes.size else None
+            state = law.initial_state(nodes.size, traction0(xs[nodes], zbar, m)) \
+                if nodes.size else None
             points.append(NodalGroup(nodes=nodes, R=R, w=self.W[nodes, m] / self.A[nodes],
                                      c_n=c_n[nodes] if m < L else np.ones(nodes.size),
                                      law=law, state=state, trial=state))

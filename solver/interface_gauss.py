@@ -12,6 +12,7 @@ from typing import Any
 
 import basix
 import numpy as np
+import ufl
 from dolfinx import fem, la
 from dolfinx import mesh as dmesh
 from petsc4py import PETSc
@@ -63,6 +64,16 @@ class GaussInterface(NodalInterface):
     quadrature = "gauss"
     has_matrix = True
 
+    def surface_measure(self) -> ufl.Measure:
+        """Shaft and base facets with the 2 x 2 Gauss rule of the law's points.
+
+        The excess pore pressure beside the law (``solver/forms.py::interface``) is integrated
+        as the law's traction is, so that a pressure the initial traction holds cancels exactly.
+        """
+        mesh, ents = self._entities
+        dS = ufl.Measure("dS", domain=mesh, subdomain_data=ents, metadata={"quadrature_degree": 3})
+        return dS(SHAFT) + dS(BASE)
+
     def _build_groups(self, md: MeshData, ents: list, traction0: Callable,
                       parts: tuple) -> list[GaussGroup]:
         """Facet data per group: soil/structure nodes, Gauss weights, frames, states."""
@@ -111,7 +122,7 @@ class GaussInterface(NodalInterface):
             R = np.repeat(self._frames(nc[sel], base=m >= L), 4, axis=0)
             x = xg[sel].reshape(-1, 3)
             law = self.laws[m]
-            state = law.initial_state(4 * nf, traction0(x[:, 2], m)) if nf else None
+            state = law.initial_state(4 * nf, traction0(x, x[:, 2], m)) if nf else None
             dofs = [(3 * f[:, :, None] + np.arange(3)).reshape(nf, 12).astype(np.int32)
                     for f in (fn_s[sel], fn_t[sel])]
             groups.append(GaussGroup(fnodes=fn_s[sel], dofs_soil=dofs[0], dofs_struct=dofs[1],

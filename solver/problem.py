@@ -36,6 +36,7 @@ from pilegroup.solver.inputs import (
     Discretisation,
     DisplacementBC,
     ElasticSolid,
+    InstallationExcess,
     InterfaceCoupling,
     PressureBC,
     RigidPlate,
@@ -69,6 +70,8 @@ class BiotProblem:
         interface: give piles and cap their own displacement field, joined to the soil only by
             the zero-thickness interface (:class:`NodalInterface`, or :class:`GaussInterface`
             with ``quadrature="gauss"``); ``None`` ties them.
+        installation: excess pore pressure the piles' installation leaves around them at the
+            start (``None``: none).
     """
 
     def __init__(
@@ -83,6 +86,7 @@ class BiotProblem:
         options: SolverOptions | None = None,
         self_weight: bool = True,
         interface: InterfaceCoupling | None = None,
+        installation: InstallationExcess | None = None,
     ) -> None:
         self.md, self.mesh, self.comm = md, md.mesh, md.mesh.comm
         self.disc = disc = disc or Discretisation()
@@ -90,10 +94,11 @@ class BiotProblem:
         self.coupling = interface
         self.timings = {"assemble_F": 0.0, "assemble_J": 0.0, "solve": 0.0, "law": 0.0}
         self.layout = BlockLayout(md, materials, disc, separate=interface is not None)
-        self.column = SoilColumn(md, materials)
+        self.column = SoilColumn(md, materials, installation)
         if self.column.has_excess:
             self.column.set_excess_levels(self.layout.Q.tabulate_dof_coordinates()[:, 2],
                                           self.comm)
+        self.column.check_installation(self.layout.Q.tabulate_dof_coordinates(), self.comm)
         self.coef = Coefficients(self.layout, disc, self.column)
         self.interface = self._define_interface(interface)
         self._define_forms(loads, self_weight)
@@ -120,10 +125,11 @@ class BiotProblem:
         return cls(self.md, lay.split, lay.body("structure").V, lay.body("soil").V,
                    list(coupling.laws), coupling.traction0 or self._interface_traction0)
 
-    def _interface_traction0(self, z: np.ndarray, m: int) -> np.ndarray:
-        """In-situ local traction of interface group ``m`` at heights ``z`` (kPa)."""
+    def _interface_traction0(self, x: np.ndarray, z: np.ndarray, m: int) -> np.ndarray:
+        """In-situ local traction of interface group ``m`` at points ``x``, heights ``z`` (kPa)."""
         L = self.layout.split.n_layers
-        return self.column.interface_traction(z, groups.soil_layer(m + 1) if m < L else None)
+        return self.column.interface_traction(x, z, groups.soil_layer(m + 1) if m < L
+                                              else None)
 
     def _define_forms(self, loads: Sequence[SurfaceLoad], self_weight: bool) -> None:
         """Every term of the weak form, compiled once."""
@@ -478,19 +484,41 @@ class BiotProblem:
     # ------------------------------------------------------------------ initial stress
     def geostatic_stress(self) -> dict[str, np.ndarray]:
         """K0 effective stress at the quadrature points of each group (Mandel, kPa)."""
-        return self.column.stress([b.qp for b in self.bodies])
+        return self.column.stress([b.qp for b in self.bodies], self._installation_at_points())
+
+    def _installation_at_points(self) -> dict[str, np.ndarray] | None:
+        """The installation excess pore pressure at every soil group's quadrature points.
+
+        The interpolant in the pressure's element (nodal values of the closed form), so that the
+        effective stress it takes off balances the pressure field exactly.
+        """
+        if self.column.installation is None:
+            return None
+        out = {}
+        for b in self.bodies:
+            soil = [g for g in b.qp.groups if isinstance(g.material, SoilMaterial)]
+            if not soil:
+                continue
+            f = fem.Function(fem.functionspace(b.mesh, self.layout.Q.ufl_element()))
+            f.interpolate(lambda x: self.column.installation_excess(x.T))
+            expr = fem.Expression(f, b.qp.points)
+            for g in soil:
+                out[g.name] = expr.eval(b.mesh, g.cells).reshape(-1) if g.n else np.zeros(0)
+        return out
 
     @property
     def has_initial_excess(self) -> bool:
-        """Whether a soil group starts with an excess pore pressure (consolidating layers)."""
-        return self.column.has_excess
+        """Whether the soil starts with an excess pore pressure (layers, installation)."""
+        return self.column.has_excess or self.column.installation is not None
 
     def set_initial_pressure(self) -> None:
-        """The excess pore pressure at the start: the layers' ``u0`` (0 unless given)."""
+        """The excess pore pressure at the start: the layers' ``u0`` plus the installation's."""
         lay = self.layout
-        z = lay.Q.tabulate_dof_coordinates()[:, 2]
+        x = lay.Q.tabulate_dof_coordinates()
         for f in (lay.p, lay.p_n):
-            f.x.array[:] = self.column.excess(z)
+            f.x.array[:] = self.column.excess(x[:, 2])
+            if self.column.installation is not None:
+                f.x.array[:] += self.column.installation_excess(x)
 
     def set_initial_stress(self, stress0: Mapping[str, np.ndarray | None]) -> None:
         """Initialise every group's law state with ``stress0[name]`` ((n,6) Mandel kPa)."""

@@ -29,8 +29,9 @@ positive down; forces kN; stresses kPa; displacements m.
 * ``neutral_plane.csv``: ``t_day,pile,neutral_plane_depth_m,dragload_kN,downdrag_m,
   head_load_kN,max_axial_force_kN,head_settlement_m`` (:mod:`pilegroup.studies.results.downdrag`);
 * ``settlement_profiles.csv``: ``t_day,pile,depth_m,axial_force_kN,pile_settlement_m,
-  soil_settlement_m`` (per pile at its element layers: the soil beside the pile; ``pile = 0``:
-  the free field, axial force and pile settlement empty);
+  soil_settlement_m,excess_pore_pressure_kPa`` (per pile at its element layers: the soil beside
+  the pile, the excess pore pressure at the shaft; ``pile = 0``: the free field, axial force
+  and pile settlement empty);
 * ``surface_trough.csv``: ``t_day,x_m,settlement_m`` (the ground surface through the group's
   centre, parallel to x).
 """
@@ -74,7 +75,7 @@ COLUMNS: dict[str, tuple[str, ...]] = {
     NEUTRAL_PLANE_CSV: ("t_day", "pile", "neutral_plane_depth_m", "dragload_kN", "downdrag_m",
                         "head_load_kN", "max_axial_force_kN", "head_settlement_m"),
     SETTLEMENT_PROFILES_CSV: ("t_day", "pile", "depth_m", "axial_force_kN", "pile_settlement_m",
-                              "soil_settlement_m"),
+                              "soil_settlement_m", "excess_pore_pressure_kPa"),
     TROUGH_CSV: ("t_day", "x_m", "settlement_m"),
 }
 #: The columns that hold text; all others hold numbers.

@@ -11,6 +11,7 @@
   soil beside it (the pile's minus the interface's relative displacement), and, with ``pile =
   0``, the free field: the soil's settlement along the vertical farthest from the piles in the
   modelled block (a corner; the block's sides are on rollers, so it settles as a wide site);
+  and the excess pore pressure in the soil at the shaft (free field: on that vertical);
 * ``surface_trough.csv``: the ground surface's settlement along the line through the group's
   centre parallel to x, across the whole block (points inside a pile left out).
 
@@ -79,6 +80,22 @@ class GroundProbe:
         self._trough = PointSampler(soil.u, np.column_stack(
             [xs, np.full(N_TROUGH, y0), np.zeros(N_TROUGH)]))
         self.rows: dict[str, list[str]] = {"plane": [], "profiles": [], "trough": []}
+        self._p = pb.layout.p
+        self._free_p = PointSampler(self._p, self._free.pts)
+        self._shaft_p: dict[int, PointSampler] = {}
+
+    def _shaft_pressure(self, k: int, depth: np.ndarray) -> np.ndarray:
+        """Excess pore pressure (kPa) in the soil at pile ``k``'s shaft at ``depth`` (collective).
+
+        Sampled just outside the shaft (0.1 % of the radius) on the side at 45 degrees to x and
+        y, which a reduced model keeps (it holds x >= 0 and y >= 0 about its mirror planes).
+        """
+        if k not in self._shaft_p:
+            x, y = self.piles.xy[k - 1]
+            rho = 0.5 * self.piles.d * 1.001 / np.sqrt(2.0)
+            self._shaft_p[k] = PointSampler(self._p, np.column_stack(
+                [np.full(depth.size, x + rho), np.full(depth.size, y + rho), -depth]))
+        return self._shaft_p[k]()
 
     def write(self, t: float, stage: str) -> None:
         """Export protocol: every table at output time ``t`` (collective)."""
@@ -92,21 +109,22 @@ class GroundProbe:
                 dz, _, rel = p.interface_profile(k, fields)
                 if dz.size > 1:
                     s_soil = s_pile - np.interp(depth, dz, rel)
-            per_source[k] = (depth, N, s_pile, s_soil)
+            per_source[k] = (depth, N, s_pile, s_soil,
+                             np.atleast_1d(self._shaft_pressure(k, depth)))
         for i in range(1, len(p.xy) + 1):
-            depth, N, s_pile, s_soil = per_source[p.source[i]]
+            depth, N, s_pile, s_soil, u = per_source[p.source[i]]
             if not depth.size:
                 continue
             npl = neutral_plane(depth, N, s_pile, s_soil)
             self.rows["plane"].append(
                 f"{t:.6g},{i},{npl.depth_m:.6g},{npl.dragload_kN:.9g},{npl.downdrag_m:.9g},"
                 f"{npl.head_load_kN:.9g},{npl.max_force_kN:.9g},{s_pile[0]:.9g}")
-            self.rows["profiles"] += [f"{t:.6g},{i},{a:.6g},{b:.9g},{c:.9g},{d:.9g}"
-                                      for a, b, c, d in zip(depth, N, s_pile, s_soil,
-                                                            strict=True)]
-        free = -self._free()[:, 2]
-        self.rows["profiles"] += [f"{t:.6g},0,{a:.6g},,,{b:.9g}"
-                                  for a, b in zip(self.free_depth, free, strict=True)
+            self.rows["profiles"] += [f"{t:.6g},{i},{a:.6g},{b:.9g},{c:.9g},{d:.9g},{_num(e)}"
+                                      for a, b, c, d, e in zip(depth, N, s_pile, s_soil, u,
+                                                               strict=True)]
+        free, free_p = -self._free()[:, 2], self._free_p()
+        self.rows["profiles"] += [f"{t:.6g},0,{a:.6g},,,{b:.9g},{_num(c)}"
+                                  for a, b, c in zip(self.free_depth, free, free_p, strict=True)
                                   if np.isfinite(b)]
         trough = -self._trough()[:, 2]  # NaN inside a pile: not a point of the ground
         self.rows["trough"] += [f"{t:.6g},{a:.6g},{b:.9g}"
@@ -140,3 +158,7 @@ class GroundProbe:
         last = self.rows["plane"][-len(self.piles.xy):] if self.rows["plane"] else []
         return [dict(zip(keys, map(float, r.split(",")), strict=True)) for r in last]
 
+
+def _num(v: float) -> str:
+    """A CSV cell: the number, or empty where it does not exist (NaN)."""
+    return f"{v:.9g}" if np.isfinite(v) else ""

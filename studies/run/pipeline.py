@@ -36,6 +36,7 @@ from pilegroup.solver import (
     DisplacementBC,
     ElasticSolid,
     Export,
+    InstallationExcess,
     InterfaceCoupling,
     NewtonOptions,
     PressureBC,
@@ -124,7 +125,8 @@ def build_problem(sc: Scenario, geo: ResolvedGeometry, md: MeshData, preset: str
     for j, lay in enumerate(sc.layers):
         materials[groups.soil_layer(j + 1)] = SoilMaterial(
             soil_law(sc, j), lay.k_m_per_day, lay.porosity, lay.gamma_kN_per_m3, K0=lay.K0,
-            excess_ratio=lay.excess_pore_pressure_ratio, excess_kPa=lay.excess_pore_pressure_kPa)
+            excess_ratio=lay.excess_pore_pressure_ratio, excess_kPa=lay.excess_pore_pressure_kPa,
+            k_h_m_per_day=lay.k_h_m_per_day)
     solid = ElasticSolid(sc.structure.E, sc.structure.nu)
     for name in md.cell_names:
         if groups.is_structure(name):
@@ -149,7 +151,17 @@ def build_problem(sc: Scenario, geo: ResolvedGeometry, md: MeshData, preset: str
                          band_layers=band_layers(h))
     return BiotProblem(md, materials, disc, displacement_bcs=dbcs,
                        pressure_bcs=[ground_drainage(sc)], loads=loads, options=opts,
-                       interface=interface_coupling(sc, h))
+                       interface=interface_coupling(sc, h), installation=installation(sc))
+
+
+def installation(sc: Scenario) -> InstallationExcess | None:
+    """The piles' installation pore pressures (every pile of the whole foundation), or None."""
+    ins = sc.piles.installation
+    if ins is None:
+        return None
+    r0, z_toe = sc.piles.diameter_m / 2, -sc.piles.length_in_soil_m
+    return InstallationExcess(tuple((x, y, r0, z_toe) for x, y in sc.piles.xy),
+                              ins.excess_pore_pressure_ratio, ins.radius_ratio)
 
 
 def ground_actions(sc: Scenario) -> list[Stage]:

@@ -12,6 +12,8 @@ the tolerance and the source of the reference. Modules:
 * ``interface_cases``: ``shaft-capacity``, ``interface-patch``, ``tied-limit``;
 * ``ground_cases``: ``consolidation-surcharge`` (ground that moves);
 * ``downdrag_cases``: ``downdrag-end-bearing``, ``downdrag-floating`` (the whole run pipeline);
+* ``radial_cases``: ``radial-consolidation`` (installation pore pressures, the whole run
+  pipeline);
 * ``runner``: :func:`run_cases` and :func:`main`
   (``python -m pilegroup.studies.verification [CASE ...] [--size fast|bench] [--json]``,
   also under ``mpirun -n 2``; ``pilegroup verify``).
@@ -26,6 +28,7 @@ from pilegroup.studies.verification import (  # noqa: F401
     interface_cases,
     ground_cases,
     downdrag_cases,
+    radial_cases,
 )
 # isort: on
 

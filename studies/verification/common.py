@@ -9,9 +9,13 @@ of the shaft tractions.
 
 from __future__ import annotations
 
+import os
+import shutil
+import tempfile
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from dolfinx import mesh as dmesh
@@ -23,6 +27,7 @@ from pilegroup.geometry.box import build_box
 from pilegroup.geometry.convert import build_mesh
 from pilegroup.geometry.meshdata import MeshData
 from pilegroup.geometry.spec import BlockSpec, GeometrySpec, LayerSpec, MeshSizing, PileSpec
+from pilegroup.model import scenario_from_dict
 from pilegroup.solver import (
     BiotProblem,
     Discretisation,
@@ -33,6 +38,8 @@ from pilegroup.solver import (
     SolverStage,
 )
 from pilegroup.solver.probes import eval_points
+from pilegroup.studies.results.tables import Table, read_csv
+from pilegroup.studies.run.job import run_scenario
 
 if TYPE_CHECKING:  # annotations only
     from pilegroup.solver import ElasticSolid, InterfaceCoupling, RigidPlate, SurfaceLoad
@@ -200,3 +207,31 @@ def shaft_profile_oscillation(itf: NodalInterface, comm: MPI.Comm) -> dict[str, 
         out[f"{name}_tv_ratio"] = float(np.abs(d).sum() / rng) if rng > 0 else 1.0
         out[f"{name}_sign_changes"] = float(np.sum(np.diff(np.sign(big)) != 0))
     return out
+
+
+def run_pipeline(doc: dict[str, Any], comm: MPI.Comm, names: Sequence[str]
+                 ) -> tuple[dict[str, Table], dict[str, int]]:
+    """Run a scenario (TOML document as a dict) as ``pilegroup run`` does, in a temporary folder.
+
+    Returns the contract tables ``names`` it wrote and its counts (``dofs``, ``newton``,
+    ``steps``), on every rank; the folder is removed after.
+    """
+    sc = scenario_from_dict(doc)
+    tmp = tempfile.mkdtemp(prefix="pilegroup-case-") if comm.rank == 0 else None
+    out = Path(comm.bcast(tmp, root=0))
+    progress = os.environ.get("PILEGROUP_PROGRESS")
+    os.environ["PILEGROUP_PROGRESS"] = "0"  # no progress bar inside a verification case
+    try:
+        summary = run_scenario(sc, out, comm=comm)["solver"] or {}
+    finally:
+        if progress is None:
+            del os.environ["PILEGROUP_PROGRESS"]
+        else:
+            os.environ["PILEGROUP_PROGRESS"] = progress
+    tables = None
+    if comm.rank == 0:
+        tables = {name: read_csv(out / name) for name in names}
+        shutil.rmtree(out, ignore_errors=True)
+    counts = {"dofs": summary.get("dofs", 0), "newton": summary.get("newton_iterations", 0),
+              "steps": summary.get("steps", 0)}
+    return comm.bcast(tables, root=0), counts

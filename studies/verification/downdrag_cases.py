@@ -23,26 +23,19 @@ Item 4). The soil is linear elastic, so the interface alone limits the friction.
 from __future__ import annotations
 
 import math
-import os
-import shutil
-import tempfile
 import time
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 from mpi4py import MPI
 
-from pilegroup.model import scenario_from_dict
 from pilegroup.studies.results.downdrag import end_bearing_force, force_balance
 from pilegroup.studies.results.tables import (
     NEUTRAL_PLANE_CSV,
     SETTLEMENT_PROFILES_CSV,
     Table,
-    read_csv,
 )
-from pilegroup.studies.run.job import run_scenario
-from pilegroup.studies.verification.common import world
+from pilegroup.studies.verification.common import run_pipeline, world
 from pilegroup.studies.verification.registry import CaseResult, register
 
 __all__ = ["downdrag_end_bearing", "downdrag_floating", "downdrag_scenario"]
@@ -93,33 +86,6 @@ def downdrag_scenario(end_bearing: bool, size: str = "fast") -> dict[str, Any]:
     }
 
 
-def _run(doc: dict[str, Any], comm: MPI.Comm) -> tuple[dict[str, Table], dict[str, int]]:
-    """Run the scenario in a temporary folder (removed after).
-
-    Returns its ground tables and its counts (``dofs``, ``newton``, ``steps``), on every rank.
-    """
-    sc = scenario_from_dict(doc)
-    tmp = tempfile.mkdtemp(prefix="pilegroup-downdrag-") if comm.rank == 0 else None
-    out = Path(comm.bcast(tmp, root=0))
-    progress = os.environ.get("PILEGROUP_PROGRESS")
-    os.environ["PILEGROUP_PROGRESS"] = "0"  # no progress bar inside a verification case
-    try:
-        summary = run_scenario(sc, out, comm=comm)["solver"] or {}
-    finally:
-        if progress is None:
-            del os.environ["PILEGROUP_PROGRESS"]
-        else:
-            os.environ["PILEGROUP_PROGRESS"] = progress
-    tables = None
-    if comm.rank == 0:
-        tables = {name: read_csv(out / name) for name in (NEUTRAL_PLANE_CSV,
-                                                         SETTLEMENT_PROFILES_CSV)}
-        shutil.rmtree(out, ignore_errors=True)
-    counts = {"dofs": summary.get("dofs", 0), "newton": summary.get("newton_iterations", 0),
-              "steps": summary.get("steps", 0)}
-    return comm.bcast(tables, root=0), counts
-
-
 def _last(table: Table, pile: int) -> dict[str, np.ndarray]:
     """The rows of ``pile`` at the last output time."""
     m = (table["t_day"] == table["t_day"].max()) & (table["pile"] == pile)
@@ -131,7 +97,8 @@ def downdrag_end_bearing(size: str = "fast", comm: MPI.Comm | None = None) -> Ca
     """Largest axial force of an end-bearing pile against ``Q + pi d tau_f H_soft`` (5 %)."""
     comm = comm or world()
     t0 = time.perf_counter()
-    tables, n = _run(downdrag_scenario(True, size), comm)
+    tables, n = run_pipeline(downdrag_scenario(True, size), comm,
+                             (NEUTRAL_PLANE_CSV, SETTLEMENT_PROFILES_CSV))
     plane = _last(tables[NEUTRAL_PLANE_CSV], 1)
     n_max = float(plane["max_axial_force_kN"][0])
     ref = end_bearing_force(Q_KN, math.pi * D, SHAFT_FRICTION, 10.0)
@@ -162,7 +129,8 @@ def downdrag_floating(size: str = "fast", comm: MPI.Comm | None = None) -> CaseR
     """
     comm = comm or world()
     t0 = time.perf_counter()
-    tables, n = _run(downdrag_scenario(False, size), comm)
+    tables, n = run_pipeline(downdrag_scenario(False, size), comm,
+                             (NEUTRAL_PLANE_CSV, SETTLEMENT_PROFILES_CSV))
     plane = _last(tables[NEUTRAL_PLANE_CSV], 1)
     prof = tables[SETTLEMENT_PROFILES_CSV]
     t_a, t_b = np.unique(prof["t_day"])[-2:]

@@ -18,7 +18,8 @@ ROOT = Path(__file__).resolve().parents[2]
 def test_cases_are_registered_in_run_order():
     assert list(ver.CASES) == ["terzaghi", "mandel", "triaxial", "shaft-capacity",
                                "interface-patch", "tied-limit", "consolidation-surcharge",
-                               "downdrag-end-bearing", "downdrag-floating"]
+                               "downdrag-end-bearing", "downdrag-floating",
+                               "radial-consolidation"]
 
 
 def test_registry_passes_only_accepted_overrides(monkeypatch):

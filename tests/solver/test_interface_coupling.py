@@ -60,8 +60,8 @@ def build(degree, comm=MPI.COMM_WORLD):
     laws = [LinearSprings(), LinearSprings(), None, None]
     sigma0 = -10.0
 
-    def traction0(z, m):
-        t = np.zeros((z.size, 3))
+    def traction0(x, z, m):
+        t = np.zeros((x.shape[0], 3))
         t[:, 0] = sigma0 * (1 + z)
         return t
 

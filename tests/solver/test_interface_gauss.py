@@ -81,7 +81,7 @@ def box(comm, n=4) -> MeshData:
                      "pile_front": 23})
 
 
-def _traction0(z, m):
+def _traction0(x, z, m):
     t = np.zeros((z.size, 3))
     t[:, 0] = -10.0 * (1.0 + z)  # linear in z: both quadratures integrate it exactly
     t[:, 1] = 3.0 - 2.0 * z
@@ -134,7 +134,7 @@ def test_gauss_points_weights_and_nodal_output():
         np.testing.assert_allclose(itf.groups[m].R[:, 0], np.tile([1.0, 0, 0],
                                                                       (len(p["x"]), 1)),
                                    atol=1e-12)
-        np.testing.assert_allclose(p["state"]["traction"], _traction0(p["x"][:, 2], m))
+        np.testing.assert_allclose(p["state"]["traction"], _traction0(p["x"], p["x"][:, 2], m))
     # area-weighted nodal averages of a linear field are exact at interior nodes; the constant
     # tau2 = 1 is reproduced at every interface node
     f = itf.nodal_fields()

@@ -66,9 +66,10 @@ def _ground_tables(out: Path, files: tuple[str, ...]) -> None:
                 for p in (1, CENTRE)]
         write_csv(out / "neutral_plane.csv", list(COLUMNS["neutral_plane.csv"]), rows)
     if "settlement_profiles.csv" in files:
-        rows = [[t, p, z, 1200.0 + 10 * z - 0.4 * z * z, 0.012 - 1e-5 * z, 0.02 * (1 - z / 40)]
-                for t in OUTPUT_DAYS for p in (1, CENTRE) for z in depths]
-        rows += [[t, 0, z, "", "", 0.02 * (1 - z / 40)] for t in OUTPUT_DAYS for z in depths]
+        rows = [[t, p, z, 1200.0 + 10 * z - 0.4 * z * z, 0.012 - 1e-5 * z, 0.02 * (1 - z / 40),
+                 0.5] for t in OUTPUT_DAYS for p in (1, CENTRE) for z in depths]
+        rows += [[t, 0, z, "", "", 0.02 * (1 - z / 40), 0.0] for t in OUTPUT_DAYS
+                 for z in depths]
         write_csv(out / "settlement_profiles.csv", list(COLUMNS["settlement_profiles.csv"]), rows)
     if "surface_trough.csv" in files:
         rows = [[t, x, 0.01 * (1 - abs(x) / 40)] for t in OUTPUT_DAYS for x in range(-40, 41, 4)]
