@@ -122,6 +122,10 @@ class Layer(_ElasticMPa):
     excess_pore_pressure_kPa: float = 0.0
     """Excess pore pressure at the start, kPa, uniform over the layer (e.g. from an earlier
     fill); at most the vertical effective stress at the layer's top. Not with the ratio."""
+    drained: bool = False
+    """An aquifer: its pore water drains to far away (a sand or gravel layer open to the
+    region), so its excess pore pressure stays the water table's (0, or that of a lowered
+    water table): the layers around it consolidate towards it."""
 
     def __post_init__(self) -> None:
         if not self.name.strip():

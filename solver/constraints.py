@@ -53,8 +53,10 @@ class Constraints:
             if pbc.action is not None:  # scaled by a ground action's amplitude (set_ground)
                 value = fem.Constant(mesh, default_scalar_type(0.0))
                 self._p_consts.append((pbc, value))
-            bc, bc0 = self.add(layout.pressure_dofs(pbc.facet), layout.Q, value, layout.p)
-            if pbc.facet is not None and not pbc.in_undrained_steps:
+            dofs = layout.pressure_dofs(pbc.facet) if pbc.cells is None else \
+                layout.pressure_dofs_in_cells(pbc.cells)
+            bc, bc0 = self.add(dofs, layout.Q, value, layout.p)
+            if (pbc.facet is not None or pbc.cells is not None) and not pbc.in_undrained_steps:
                 self._drain.update({id(bc), id(bc0)})
         self.plate = RigidPlateControl(self, layout, plates[0], interface) if plates else None
 

@@ -365,6 +365,14 @@ class PressureBC:
     in_undrained_steps: bool = False
     action: int | None = None
     """Ground action whose amplitude multiplies ``value`` (e.g. a lowered water table)."""
+    cells: str | None = None
+    """A soil cell group whose every pressure dof is prescribed instead of a facet group (a
+    drained layer: an aquifer that holds the water table's pressure); ``facet`` then None."""
+
+    def __post_init__(self) -> None:
+        if self.cells is not None and self.facet is not None:
+            raise SolverInputError(f"PressureBC: facet = {self.facet!r} and cells ="
+                                   f" {self.cells!r}; allowed: one of them")
 
 
 @dataclass(frozen=True)

@@ -306,6 +306,17 @@ class BlockLayout:
         self.p_mesh.topology.create_connectivity(0, self.p_mesh.topology.dim)
         return fem.locate_dofs_topological(self.Q, 0, sv)
 
+    def pressure_dofs_in_cells(self, name: str) -> np.ndarray:
+        """Every pressure dof of the soil cell group ``name`` (a drained layer)."""
+        md = self.md
+        cells = md.cell_tags.find(md.cell_tag(name)).astype(np.int32)
+        if self.has_solids:  # parent cells -> the pressure's sub-mesh
+            cells = self.emaps[0].sub_topology_to_topology(cells, inverse=True)  # type: ignore[index]
+            cells = cells[cells >= 0].astype(np.int32)
+        tdim = self.p_mesh.topology.dim
+        self.p_mesh.topology.create_connectivity(tdim, tdim)
+        return fem.locate_dofs_topological(self.Q, tdim, cells)
+
     # ------------------------------------------------------------------ vectors
     def commit_fields(self) -> None:
         """Current fields become the committed ones (``u_n``, ``p_n``)."""

@@ -150,7 +150,7 @@ def build_problem(sc: Scenario, geo: ResolvedGeometry, md: MeshData, preset: str
     opts = SolverOptions(preset=p, overrides=dict(num.solver.options), newton=newton,
                          band_layers=band_layers(h))
     return BiotProblem(md, materials, disc, displacement_bcs=dbcs,
-                       pressure_bcs=[ground_drainage(sc)], loads=loads, options=opts,
+                       pressure_bcs=drainage(sc), loads=loads, options=opts,
                        interface=interface_coupling(sc, h), installation=installation(sc))
 
 
@@ -181,6 +181,17 @@ def surcharge_loads(sc: Scenario) -> list[SurfaceLoad]:
     return [SurfaceLoad(groups.GROUND, st.surcharge_kPa, action=i,  # type: ignore[arg-type]
                         area=st.area_m)
             for i, st in enumerate(ground_actions(sc))]
+
+
+def drainage(sc: Scenario) -> list[PressureBC]:
+    """The drained ground surface and every drained layer (an aquifer), at the same pressure.
+
+    A lowered water table lowers the aquifers' pressure with it (pumping lowers the head of the
+    aquifer it draws from; docs/model.md, "Ground that moves").
+    """
+    top = ground_drainage(sc)
+    return [top] + [PressureBC(None, top.value, action=top.action, cells=groups.soil_layer(j + 1))
+                    for j, lay in enumerate(sc.layers) if lay.drained]
 
 
 def ground_drainage(sc: Scenario) -> PressureBC:

@@ -209,3 +209,34 @@ def test_horizontal_conductivity_leaves_vertical_consolidation_alone():
                    _steps(T * H**2 / CV), geostatic_tol=1e-9)
         runs.append(_settlement(pb))
     assert runs[1] == pytest.approx(runs[0], rel=1e-9)
+
+
+@pytest.mark.parametrize("T", [0.2, 3.0])
+def test_drained_layer_halves_the_drainage_path(T):
+    """A clay on a drained sand layer (an aquifer) consolidates from both faces: Terzaghi's
+    double drainage, drainage path H/2, against the settlement of a uniform excess pore pressure
+    ``u0``: ``s = u0 H U(T) / m`` with ``T = c_v t / (H/2)^2`` (tolerance 0.5 %)."""
+    u0 = 20.0
+    levels = np.concatenate([graded_levels(-H - 2.0, -H, 2), graded_levels(-H, 0.0, 24)[1:]])
+    md = build_box(world(), (0.0, 1.0), (0.0, 1.0), levels, 1, 1, layer_tops=[-H])
+    clay = SoilMaterial(LinearElastic(SOIL.E, SOIL.nu), SOIL.k, SOIL.porosity, 18.0,
+                        excess_kPa=u0)
+    # the sand starts with the same excess, drained at once: the clay's initial excess then
+    # reaches its bottom face (the interpolant would otherwise ramp it to 0 over one element)
+    sand = SoilMaterial(LinearElastic(100.0 * SOIL.E, SOIL.nu), SOIL.k, SOIL.porosity, 18.0,
+                        excess_kPa=u0)
+    pb = BiotProblem(md, {groups.soil_layer(1): clay, groups.soil_layer(2): sand},
+                     Discretisation("Q2Q1"), displacement_bcs=box_bcs(),
+                     pressure_bcs=[PressureBC(groups.GROUND),
+                                   PressureBC(None, cells=groups.soil_layer(2))],
+                     options=SolverOptions(preset="direct"))
+    t_end = T * (H / 2) ** 2 / CV
+    run_stages(pb, [SolverStage("geostatic", "geostatic"),
+                    SolverStage("consolidation", "consolidation", t_end)], _steps(t_end),
+               geostatic_tol=1e-9)
+    U = terzaghi_degree(T)
+    s_sand = u0 * 2.0 / (100.0 * M_OED)  # the sand's compression, at once
+    assert _settlement(pb) == pytest.approx(u0 * H * U / M_OED + s_sand, rel=5e-3)
+    p = pb.layout.p.x.array
+    z = pb.layout.Q.tabulate_dof_coordinates()[:, 2]
+    assert np.all(p[z < -H - 1e-9] == 0.0)  # the aquifer holds the water table's pressure
