@@ -14,10 +14,12 @@ complete run of the same resolved scenario (:func:`~pilegroup.studies.batch.rows
 is skipped, every other case is run again from an emptied folder (a killed batch resumes).
 
 Failures: an exception in a case is recorded (``batch_case.json``, ``summary.json``) and the
-group takes the next case. In a group of several ranks a failure is only survivable when every
-rank of the group raised (the solver makes law and convergence failures collective): the ranks
-that raised meet in a barrier on a communicator of their own and wait up to
-:data:`AGREE_TIMEOUT_S` for the rest of the group. If a rank raised alone, the others are stuck
+group takes the next case. A case whose folder another run holds
+(:mod:`pilegroup.studies.run.folder_lock`) is not run, its folder left alone, and counted as
+failed with a warning line naming the holder. In a group of several ranks a failure is only
+survivable when every rank of the group raised (the solver makes law and convergence failures
+collective): the ranks that raised meet in a barrier on a communicator of their own and wait up
+to :data:`AGREE_TIMEOUT_S` for the rest of the group. If a rank raised alone, the others are stuck
 in a collective operation that will never complete; that rank records the failure, prints one
 line naming itself and the case, and aborts the whole MPI job (finished cases stay complete;
 running the plan again resumes).
@@ -53,7 +55,7 @@ from petsc4py import PETSc
 from tqdm import tqdm
 from tqdm.contrib.logging import logging_redirect_tqdm
 
-from pilegroup.errors import PilegroupError, ScenarioError
+from pilegroup.errors import FolderBusy, PilegroupError, ScenarioError
 from pilegroup.fileio import write_json_atomic
 from pilegroup.studies.batch.batch_plan import BatchPlan, ResolvedCase, queue_order, resolve_cases
 from pilegroup.studies.batch.rows import (
@@ -64,6 +66,7 @@ from pilegroup.studies.batch.rows import (
     is_complete,
     write_tables,
 )
+from pilegroup.studies.run.folder_lock import empty_folder, folder_lock
 from pilegroup.studies.run.interrupt import abort_job
 from pilegroup.studies.run.job import run_scenario
 
@@ -188,12 +191,27 @@ def _agree(exc: Exception, group: MPI.Comm, err_comm: MPI.Comm, world: MPI.Comm,
 
 
 def _run_case(rc: ResolvedCase, run_dir: Path, group: MPI.Comm, err_comm: MPI.Comm,
-              world: MPI.Comm, options: dict[str, str]) -> None:
-    """Run one case on ``group`` into an emptied ``run_dir``; the first rank records it."""
+              world: MPI.Comm, options: dict[str, str]) -> bool:
+    """Run one case on ``group`` into its locked, emptied ``run_dir``; False if not run.
+
+    The first rank records the case. False (on every rank of the group) when another run holds
+    the folder: the case is not run and its folder is left alone.
+    """
+    try:
+        with folder_lock(run_dir, group):
+            _run_locked_case(rc, run_dir, group, err_comm, world, options)
+    except FolderBusy as exc:
+        if group.rank == 0:
+            log.warning("case %s not run: %s", rc.name, exc)
+        return False
+    return True
+
+
+def _run_locked_case(rc: ResolvedCase, run_dir: Path, group: MPI.Comm, err_comm: MPI.Comm,
+                     world: MPI.Comm, options: dict[str, str]) -> None:
     start = time.time()
     if group.rank == 0:
-        shutil.rmtree(run_dir, ignore_errors=True)
-        run_dir.mkdir(parents=True)
+        empty_folder(run_dir)
         write_record(run_dir, rc, "running", start=start, ranks=group.size)
     group.Barrier()
     release_memory(group)
@@ -348,14 +366,18 @@ def run_batch(plan: BatchPlan, out: str | Path, ranks_per_case: int = 1,
         monitor = _Monitor(cases, out, skipped, head, progress)
     err_comm = group.Dup()
     options = PETSc.Options().getAll()
+    busy = 0  # cases whose folder another run held (counted by each group's first rank)
     with _quiet_runs(), logging_redirect_tqdm() if monitor and progress else nullcontext():
         while (index := group.bcast(queue.claim() if group.rank == 0 else None)) is not None:
-            _run_case(cases[index], out / cases[index].name, group, err_comm, comm, options)
+            if not _run_case(cases[index], out / cases[index].name, group, err_comm, comm,
+                             options) and group.rank == 0:
+                busy += 1
         _wait_for_all(comm)
         rows = monitor.finish() if monitor is not None else []
     if comm.rank == 0:
         shutil.rmtree(qdir.parent, ignore_errors=True)
     failed = comm.bcast(counts(rows)["failed"] if comm.rank == 0 else None, root=0)
+    failed += comm.allreduce(busy)
     err_comm.Free()
     group.Free()
     return BatchResult(rows, failed)

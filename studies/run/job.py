@@ -19,6 +19,7 @@ from pilegroup.model import Scenario
 from pilegroup.studies.report.run_report import write_report
 from pilegroup.studies.results.records import JobSummary, write_job_summary
 from pilegroup.studies.run.checkpoint import check_resume, completed_summary, remove_checkpoint
+from pilegroup.studies.run.folder_lock import folder_lock
 from pilegroup.studies.run.pipeline import run_coupled
 
 log = logging.getLogger(__name__)
@@ -40,6 +41,10 @@ def run_scenario(sc: Scenario, out: Path, mesh_size: float | None = None,
     :class:`~pilegroup.errors.ScenarioError`); a run whose ``summary.json`` says complete is
     not run again (its summary is returned). Without it, an older checkpoint in ``out`` is
     removed first.
+
+    The run holds the lock of ``out`` for its life
+    (:func:`~pilegroup.studies.run.folder_lock.folder_lock`): while another run holds it,
+    :class:`~pilegroup.errors.FolderBusy` is raised before anything is read or written.
     """
     t0 = time.perf_counter()
     if mesh_size is not None:
@@ -47,6 +52,13 @@ def run_scenario(sc: Scenario, out: Path, mesh_size: float | None = None,
             sc.numerics, mesh=dataclasses.replace(sc.numerics.mesh, size_m=mesh_size)))
     if resume and stop_after != "solve":
         raise ScenarioError("--stop-after", stop_after, "only 'solve' with --resume")
+    with folder_lock(out, comm):
+        return _locked_run(sc, out, stop_after, comm, resume, t0)
+
+
+def _locked_run(sc: Scenario, out: Path, stop_after: str, comm: MPI.Comm, resume: bool,
+                t0: float) -> JobSummary:
+    """:func:`run_scenario` once the folder is locked."""
     manifest = check_resume(out, sc, comm) if resume else None
     if manifest is not None:
         done = completed_summary(out, comm)
