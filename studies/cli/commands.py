@@ -7,6 +7,8 @@ SIGINT/SIGTERM after saving a checkpoint (128 + the signal number).
 Under MPI a :class:`~pilegroup.errors.PilegroupError` is raised on every rank alike (the
 scenario, the stepper's decisions and the Newton checks are collective), so rank 0 prints its
 one line; any other exception may be one rank's alone and ends every rank (:func:`_abort`).
+An output file that cannot be written (:class:`~pilegroup.errors.OutputError`, e.g. a CSV file
+rank 0 writes) is such an exception: ``pilegroup: run failed: cannot write FILE: why``, exit 1.
 """
 
 from __future__ import annotations
@@ -21,7 +23,7 @@ import traceback
 from collections.abc import Sequence
 from pathlib import Path
 
-from pilegroup.errors import RunInterrupted
+from pilegroup.errors import OutputError, RunInterrupted
 from pilegroup.fileio import write_text_atomic
 from pilegroup.model import BUNDLED, PilegroupError, ScenarioError, bundled_text, load_scenario
 from pilegroup.model.loader import parse_override
@@ -344,7 +346,8 @@ def _abort(exc: Exception, verbose: bool) -> int:
     where = f"rank {comm.rank} of {comm.size}" if comm.size > 1 else "run"
     if verbose:
         traceback.print_exc()
-    line = f"pilegroup: {where} failed: {type(exc).__name__}: {exc}"
+    what = str(exc) if isinstance(exc, OutputError) else f"{type(exc).__name__}: {exc}"
+    line = f"pilegroup: {where} failed: {what}"
     if comm.size > 1:
         abort_job(line, EXIT_FAILED)
     else:

@@ -260,7 +260,6 @@ class Checkpoints:
         """Write a checkpoint of the problem, ``state`` and the exports (collective)."""
         t0 = time.perf_counter()
         comm, gen = self.comm, self.generation + 1
-        self.folder.mkdir(parents=True, exist_ok=True)
         name = f"state-{gen:06d}-rank{comm.rank:04d}.npz"
         with atomic_path(self.folder / name) as tmp:
             np.savez(tmp, **problem_state(self.pb))

@@ -75,6 +75,9 @@ def _locked_run(sc: Scenario, out: Path, stop_after: str, comm: MPI.Comm, resume
     geo = resolve_geometry(sc)  # the one resolution of the scenario's geometry in a run
     try:
         summary = _run(sc, geo, out, stop_after, comm, t0, manifest)
+        if comm.rank == 0 and summary["solver"] is not None and sc.outputs.plots:
+            for path in write_report(out):  # a figure not written fails the run too
+                log.info("wrote %s", path)
     except RunInterrupted as exc:
         _write_interrupted(out, sc, comm, exc, t0)
         raise
@@ -83,9 +86,6 @@ def _locked_run(sc: Scenario, out: Path, stop_after: str, comm: MPI.Comm, resume
         if isinstance(exc, PilegroupError) and comm.rank == 0 and sc.outputs.plots:
             _plots_of_what_was_reached(out)
         raise
-    if comm.rank == 0 and summary["solver"] is not None and sc.outputs.plots:
-        for path in write_report(out):
-            log.info("wrote %s", path)
     return summary
 
 
@@ -124,7 +124,7 @@ def _write_interrupted(out: Path, sc: Scenario, comm: MPI.Comm, exc: RunInterrup
                        t0: float) -> None:
     """``summary.json`` with ``status = "interrupted"``: the signal, time reached, checkpoint."""
     if comm.rank == 0:
-        write_job_summary(out, {
+        _write_summary_of_stop(out, {
             "scenario": sc.name, "status": "interrupted", "signal": exc.signal_name,
             "t_day": exc.t, "stage": exc.stage, "checkpoint": exc.checkpoint,
             "resume": "pilegroup run SCENARIO --out OUT --resume (same scenario, --set "
@@ -143,9 +143,20 @@ def _write_failure(out: Path, sc: Scenario, comm: MPI.Comm, exc: BaseException,
     collective = isinstance(exc, PilegroupError)
     if collective and comm.rank != 0:
         return
-    write_job_summary(out, {
+    _write_summary_of_stop(out, {
         "scenario": sc.name, "status": "failed",
         "reason": f"{type(exc).__name__}: {exc}",
         "rank": None if collective else comm.rank, "ranks": comm.size,
         "wall_s": time.perf_counter() - t0,
         "solver_summary": "summary_solver.json (written up to the last output time)"})
+
+
+def _write_summary_of_stop(out: Path, summary: JobSummary) -> None:
+    """``summary.json`` of a run that stopped; a warning if it cannot be written.
+
+    The stop's own error stays the one reported.
+    """
+    try:
+        write_job_summary(out, summary)
+    except OSError as exc:
+        log.warning("no summary.json of the stopped run: %s", exc)
