@@ -97,3 +97,13 @@ def test_failed_write_on_rank_0_ends_both_ranks(small_pile, tmp_path):
         f"pilegroup: rank 0 of 2 failed: {why}"]
     s = json.loads((out / "summary.json").read_text())
     assert s["status"] == "failed" and s["rank"] == 0 and s["reason"] == f"OutputError: {why}"
+
+
+def test_xdmf_not_written_fails_the_run(small_pile, tmp_path, monkeypatch, capsys):
+    monkeypatch.setenv("PILEGROUP_MESH_CACHE", str(tmp_path / "cache"))
+    out = tmp_path / "run"
+    (out / "results.h5").mkdir(parents=True)
+    assert _run(small_pile, out, sets=("outputs.plots=false",)) == 1
+    why = f"cannot write {out / 'results.h5'}: Failed to create HDF5 file."
+    assert _lines(capsys) == [f"pilegroup: run failed: {why}"]
+    assert json.loads((out / "summary.json").read_text())["reason"] == f"OutputError: {why}"
