@@ -47,7 +47,8 @@ def _overrides(args: argparse.Namespace) -> dict[str, object]:
 DESCRIPTIONS = {
     "scenario": "Show a bundled scenario or validate a scenario file.",
     "run": ("Validate the scenario, build its mesh and run every stage that is implemented; write "
-            "outputs and summary.json to --out."),
+            "outputs and summary.json to --out. One run at a time writes into a folder: a "
+            "second run into the --out of a running one exits 2 naming the running process."),
     "mesh": ("Mesh the scenario with gmsh (cap, piles, layered soil; plan quads extruded through "
              "the layers), write mesh.xdmf with cell and facet tags (ParaView), "
              "mesh_summary.json, plan.png and cutaway.png, and print counts and quality. Meshes "

@@ -114,7 +114,9 @@ def _manifest_problem(path: Path) -> tuple[dict[str, Any] | None, str | None]:
                       f"{len(raw)})")
     if not isinstance(m, dict):
         return None, "is damaged (not a JSON object)"
-    if m.get("format") != FORMAT:
+    if "format" not in m:
+        return None, "is damaged (no 'format')"
+    if m["format"] != FORMAT:
         return m, None  # check_resume names the format
     missing = [k for k in MANIFEST_KEYS if k not in m]
     if missing:

@@ -107,15 +107,16 @@ def _damage(kind, folder):
     if kind == "manifest value changed":  # still valid JSON: only its seal tells
         man.write_text(man.read_text().replace(f'"t_day": {m["t_day"]!r}', '"t_day": 1.5', 1))
         return f"checkpoint file {man} is damaged (its content does not match its manifest_sha256)"
-    if kind == "manifest key lost":
-        del m["state"]
+    if kind in ("manifest key lost", "manifest format lost"):
+        key = "state" if kind == "manifest key lost" else "format"
+        del m[key]
         man.write_text(json.dumps(m))
-        return f"checkpoint file {man} is damaged (no 'state')"
+        return f"checkpoint file {man} is damaged (no {key!r})"
     raise AssertionError(kind)
 
 
 KINDS = ("rank file cut short", "rank file changed", "rank file missing", "manifest cut short",
-         "manifest value changed", "manifest key lost")
+         "manifest value changed", "manifest key lost", "manifest format lost")
 
 
 @pytest.mark.parametrize("kind", KINDS)
