@@ -143,6 +143,11 @@ class Time:
             if not 0.0 <= t <= self.end_day:
                 raise ScenarioError(f"output_days[{i}]", t, f"must be in [0, end_day = "
                                     f"{self.end_day:g}]", "day")
+        for i in range(1, len(self.output_days)):
+            if not self.output_days[i - 1] < self.output_days[i]:
+                raise ScenarioError(f"output_days[{i}]", self.output_days[i], "must be > "
+                                    f"{self.output_days[i - 1]:g}, the time before it: output "
+                                    "times are listed in increasing order, each once", "day")
 
 
 @dataclass(frozen=True)

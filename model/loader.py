@@ -213,13 +213,24 @@ def load_scenario(source: str | Path, overrides: Mapping[str, Any] | None = None
             raise ScenarioError("file", str(source),
                                 f"no such file; give a TOML path or a bundled name "
                                 f"({', '.join(BUNDLED)})")
-        text = path.read_text(encoding="utf-8")
         where = str(path)
+        text = _read_text(path)
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise ScenarioError("file", where, f"is not valid TOML: {exc}") from None
     return scenario_from_dict(apply_overrides(data, overrides or {}))
+
+
+def _read_text(path: Path) -> str:
+    """The text of a scenario file; a file that is not UTF-8 text is invalid input."""
+    data = path.read_bytes()
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise ScenarioError("file", str(path), f"is not UTF-8 text (byte {exc.start} of "
+                            f"{len(data)} is 0x{data[exc.start]:02x}); save it as UTF-8 "
+                            "TOML") from None
 
 
 def bundled_text(name: str) -> str:

@@ -20,7 +20,8 @@ from __future__ import annotations
 import resource
 import time
 import xml.etree.ElementTree as ET
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterator, Mapping
+from contextlib import contextmanager
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Protocol, TypedDict
 
@@ -32,6 +33,7 @@ from dolfinx import mesh as dmesh
 from mpi4py import MPI
 
 from pilegroup.constitutive.base import mandel_to_tensor
+from pilegroup.errors import OutputError
 from pilegroup.fileio import atomic_path, write_json_atomic
 from pilegroup.geometry import groups
 from pilegroup.solver.qpstate import QuadratureState
@@ -76,7 +78,7 @@ class _MeshSeries:
             name = {"stress": "effective_stress", "eps_p": "plastic_strain"}.get(k, k)
             self.cell_fields[k] = fem.Function(self.T0 if n == 6 else self.S0, name=name)
         if not resume:
-            with io.XDMFFile(comm, str(path), "w") as f:
+            with _xdmf(comm, path, "w") as f:
                 f.write_mesh(mesh)
 
     def write(self, t: float) -> None:
@@ -91,7 +93,7 @@ class _MeshSeries:
                 else:
                     f.x.array[cells] = avg[:, 0]
             f.x.scatter_forward()
-        with io.XDMFFile(self.comm, str(self.path), "a") as f:
+        with _xdmf(self.comm, self.path, "a") as f:
             if self.u1 is not None:
                 f.write_function(self.u1, t)
             if self.p is not None:
@@ -167,6 +169,23 @@ class XDMFSeries:
         self.comm.barrier()
 
 
+@contextmanager
+def _xdmf(comm: MPI.Comm, path: Path, mode: str) -> Iterator[io.XDMFFile]:
+    """``io.XDMFFile(comm, path, mode)``, its failures raised as ``OutputError``.
+
+    A failure of the file or its HDF5 file is raised as :class:`~pilegroup.errors.OutputError`
+    naming the file (on every rank: the XDMF/HDF5 I/O is collective). DOLFINx reports such a
+    failure as a ``RuntimeError`` (e.g. "Failed to create HDF5 file."); HDF5 itself also prints
+    its error stack on stderr.
+    """
+    try:
+        with io.XDMFFile(comm, str(path), mode) as f:
+            yield f
+    except RuntimeError as exc:
+        target = path.with_suffix(".h5") if "HDF5" in str(exc) else path
+        raise OutputError(target, OSError(None, str(exc))) from exc
+
+
 def trim_xdmf(path: Path, n: int) -> None:
     """Keep the first ``n`` times of every time series in the XDMF file ``path`` (and .h5).
 
@@ -217,7 +236,7 @@ class _InterfaceSeries:
             W = fem.functionspace(fmesh, ("Lagrange", 1, shape))
             self.fields[key] = fem.Function(W, name=key)
         if not resume:
-            with io.XDMFFile(self.comm, str(path), "w") as f:
+            with _xdmf(self.comm, path, "w") as f:
                 f.write_mesh(fmesh)
 
     def write(self, t: float) -> None:
@@ -226,7 +245,7 @@ class _InterfaceSeries:
             a = vals[key].reshape(vals[key].shape[0], -1)
             arr = fn.x.array.reshape(-1, a.shape[1])
             arr[self.dof_of] = a[self.node_of]
-        with io.XDMFFile(self.comm, str(self.path), "a") as f:
+        with _xdmf(self.comm, self.path, "a") as f:
             for fn in self.fields.values():
                 f.write_function(fn, t)
 

@@ -8,7 +8,14 @@ Which class names which kind of failure:
 * :class:`SolverError` and its subclasses: a solver input is invalid, or a run failed (the CLI
   exits with code 1);
 * :class:`RunInterrupted`: a run stopped on SIGTERM or SIGINT after saving a checkpoint (the
-  CLI exits with code 128 + the signal number: 143 or 130).
+  CLI exits with code 128 + the signal number: 143 or 130);
+* :class:`FolderBusy` (a :class:`ScenarioError`): another run holds the lock of the output
+  folder (exit code 2).
+
+One exception is on purpose outside the family: :class:`OutputError`, an ``OSError`` naming
+the output file that could not be written. It may be raised on one rank alone (rank 0 writes
+the tables), so the CLI treats it like any unexpected error of one rank: the run ends on every
+rank with exit code 1 and ``summary.json`` says ``failed``.
 
 The input errors are also ``ValueError`` (``except ValueError`` catches them). An error about
 one value names the key, the value, its unit and what is allowed, in the form of
@@ -20,15 +27,33 @@ from __future__ import annotations
 
 from typing import Self
 
+#: A value shown in a message is cut to its first :data:`SHOWN_CHARS` characters when it is
+#: longer than :data:`LONG_VALUE` characters (a pasted list of 10 000 numbers stays one line).
+LONG_VALUE = 200
+SHOWN_CHARS = 60
+
+
+def shorten(value: object) -> str:
+    """``value`` as a message shows it: strings quoted, a long one cut, with its length.
+
+    E.g. ``'xxxx...'`` of 10 000 characters becomes its first 60 characters followed by
+    ``... (10000 characters)``.
+    """
+    text = repr(value) if isinstance(value, str) else str(value)
+    if len(text) <= LONG_VALUE:
+        return text
+    n = len(value) if isinstance(value, str) else len(text)
+    return f"{text[:SHOWN_CHARS]}... ({n} characters)"
+
 
 def describe(key: str, value: object, allowed: str, unit: str = "") -> str:
     """One line naming a rejected value, e.g. ``layers[2].nu = 0.55 (-): must be in (0, 0.5)``.
 
-    Strings are quoted; the unit is shown in brackets when given.
+    Strings are quoted; the unit is shown in brackets when given; a long value is shortened
+    (:func:`shorten`).
     """
-    shown = repr(value) if isinstance(value, str) else value
     unit_txt = f" ({unit})" if unit else ""
-    return f"{key} = {shown}{unit_txt}: {allowed}"
+    return f"{key} = {shorten(value)}{unit_txt}: {allowed}"
 
 
 class PilegroupError(Exception):
@@ -59,6 +84,25 @@ class ScenarioError(PilegroupError, ValueError):
     def invalid(cls, key: str, value: object, allowed: str, unit: str = "") -> Self:
         """The error for ``key = value`` (in ``unit``), which is not ``allowed``."""
         return cls(key, value, allowed, unit)
+
+
+class FolderBusy(ScenarioError):
+    """The output folder is locked by a run that is still going (``--out`` names it)."""
+
+
+class OutputError(OSError):
+    """An output file of a run could not be written; the message names the file and why.
+
+    Not a :class:`PilegroupError`: it may happen on one rank alone (see the module text).
+    """
+
+    def __init__(self, path: object, exc: OSError) -> None:
+        why = exc.strerror or str(exc)
+        super().__init__(exc.errno, f"cannot write {path}: {why}")
+        self.path = str(path)
+
+    def __str__(self) -> str:
+        return str(self.strerror)
 
 
 class ConstitutiveError(PilegroupError, ValueError):
@@ -112,6 +156,7 @@ class RunInterrupted(PilegroupError):
 
 
 __all__ = [
-    "ConstitutiveError", "ConvergenceError", "PilegroupError", "RunInterrupted",
-    "ScenarioError", "SolverError", "SolverInputError", "StepFailure", "describe",
+    "ConstitutiveError", "ConvergenceError", "FolderBusy", "OutputError", "PilegroupError",
+    "RunInterrupted", "ScenarioError", "SolverError", "SolverInputError", "StepFailure",
+    "describe", "shorten",
 ]

@@ -1,7 +1,9 @@
 """Small file helpers shared by every layer.
 
 Atomic writes, so that an interrupted run never leaves a half-written JSON, CSV, mesh or
-picture behind: the file is written under a temporary name in the same folder and renamed.
+picture behind: the file is written under a temporary name in the same folder and renamed. A
+write that fails (a full disk, a read-only folder, a directory in the file's place) raises
+:class:`~pilegroup.errors.OutputError` naming the file, not its temporary name.
 """
 
 from __future__ import annotations
@@ -14,6 +16,8 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
+
+from pilegroup.errors import OutputError
 
 
 def json_default(obj: Any) -> Any:
@@ -33,16 +37,27 @@ def atomic_path(path: str | Path) -> Iterator[Path]:
     ``path``, so that writers that choose the format by the suffix (gmsh, pyvista) still do.
     If the block raises, the temporary file is removed and ``path`` is left as it was. The file
     gets the permissions of a file created with ``open`` (0666 less the umask), not ``mkstemp``'s
-    private 0600.
+    private 0600. An ``OSError`` of the folder, the temporary file, the block or the rename is
+    raised as :class:`~pilegroup.errors.OutputError` naming ``path``.
     """
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=path.suffix, dir=path.parent)
-    os.close(fd)
+    try:
+        try:
+            path.parent.mkdir(parents=True, exist_ok=True)
+        except FileExistsError:
+            pass  # a file in the folder's place: mkstemp says "Not a directory"
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=path.suffix, dir=path.parent)
+        os.close(fd)
+    except OSError as exc:
+        raise OutputError(path, exc) from exc
     try:
         yield Path(tmp)
         os.chmod(tmp, 0o666 & ~_umask())
         os.replace(tmp, path)
+    except OutputError:
+        raise
+    except OSError as exc:
+        raise OutputError(path, exc) from exc
     finally:
         Path(tmp).unlink(missing_ok=True)
 

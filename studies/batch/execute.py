@@ -14,10 +14,15 @@ complete run of the same resolved scenario (:func:`~pilegroup.studies.batch.rows
 is skipped, every other case is run again from an emptied folder (a killed batch resumes).
 
 Failures: an exception in a case is recorded (``batch_case.json``, ``summary.json``) and the
-group takes the next case. In a group of several ranks a failure is only survivable when every
-rank of the group raised (the solver makes law and convergence failures collective): the ranks
-that raised meet in a barrier on a communicator of their own and wait up to
-:data:`AGREE_TIMEOUT_S` for the rest of the group. If a rank raised alone, the others are stuck
+group takes the next case. A case whose folder another run holds
+(:mod:`pilegroup.studies.run.folder_lock`) is not run, its folder left alone, and counted as
+failed with a warning line naming the holder. On SIGTERM or SIGINT (``pilegroup batch`` turns
+them into stop requests, :mod:`pilegroup.studies.run.interrupt`) each running case stops at its
+next step boundary with a checkpoint and is recorded ``interrupted``, and no group takes another
+case. In a group of several ranks a failure is only
+survivable when every rank of the group raised (the solver makes law and convergence failures
+collective): the ranks that raised meet in a barrier on a communicator of their own and wait up
+to :data:`AGREE_TIMEOUT_S` for the rest of the group. If a rank raised alone, the others are stuck
 in a collective operation that will never complete; that rank records the failure, prints one
 line naming itself and the case, and aborts the whole MPI job (finished cases stay complete;
 running the plan again resumes).
@@ -53,7 +58,7 @@ from petsc4py import PETSc
 from tqdm import tqdm
 from tqdm.contrib.logging import logging_redirect_tqdm
 
-from pilegroup.errors import PilegroupError, ScenarioError
+from pilegroup.errors import FolderBusy, PilegroupError, RunInterrupted, ScenarioError
 from pilegroup.fileio import write_json_atomic
 from pilegroup.studies.batch.batch_plan import BatchPlan, ResolvedCase, queue_order, resolve_cases
 from pilegroup.studies.batch.rows import (
@@ -64,6 +69,8 @@ from pilegroup.studies.batch.rows import (
     is_complete,
     write_tables,
 )
+from pilegroup.studies.run import interrupt
+from pilegroup.studies.run.folder_lock import empty_folder, folder_lock
 from pilegroup.studies.run.interrupt import abort_job
 from pilegroup.studies.run.job import run_scenario
 
@@ -79,10 +86,14 @@ PROGRESS_ENV = "PILEGROUP_PROGRESS"
 
 @dataclass(frozen=True)
 class BatchResult:
-    """The rows of ``batch.json`` (world rank 0 only; empty elsewhere) and the failed count."""
+    """The rows of ``batch.json`` (world rank 0 only; empty elsewhere) and the failed count.
+
+    ``signum``: the stop signal (SIGTERM, SIGINT) that ended the batch early, or 0.
+    """
 
     rows: list[BatchRow] = field(default_factory=list)
     failed: int = 0
+    signum: int = 0
 
 
 def release_memory(comm: MPI.Comm) -> None:
@@ -188,12 +199,27 @@ def _agree(exc: Exception, group: MPI.Comm, err_comm: MPI.Comm, world: MPI.Comm,
 
 
 def _run_case(rc: ResolvedCase, run_dir: Path, group: MPI.Comm, err_comm: MPI.Comm,
-              world: MPI.Comm, options: dict[str, str]) -> None:
-    """Run one case on ``group`` into an emptied ``run_dir``; the first rank records it."""
+              world: MPI.Comm, options: dict[str, str]) -> bool:
+    """Run one case on ``group`` into its locked, emptied ``run_dir``; False if not run.
+
+    The first rank records the case. False (on every rank of the group) when another run holds
+    the folder: the case is not run and its folder is left alone.
+    """
+    try:
+        with folder_lock(run_dir, group):
+            _run_locked_case(rc, run_dir, group, err_comm, world, options)
+    except FolderBusy as exc:
+        if group.rank == 0:
+            log.warning("case %s not run: %s", rc.name, exc)
+        return False
+    return True
+
+
+def _run_locked_case(rc: ResolvedCase, run_dir: Path, group: MPI.Comm, err_comm: MPI.Comm,
+                     world: MPI.Comm, options: dict[str, str]) -> None:
     start = time.time()
     if group.rank == 0:
-        shutil.rmtree(run_dir, ignore_errors=True)
-        run_dir.mkdir(parents=True)
+        empty_folder(run_dir)
         write_record(run_dir, rc, "running", start=start, ranks=group.size)
     group.Barrier()
     release_memory(group)
@@ -203,6 +229,8 @@ def _run_case(rc: ResolvedCase, run_dir: Path, group: MPI.Comm, err_comm: MPI.Co
     status, message = "complete", None
     try:
         run_scenario(rc.scenario, run_dir, comm=group)
+    except RunInterrupted as exc:  # the group's ranks stop together at a step boundary
+        status, message = "interrupted", str(exc)
     except Exception as exc:  # noqa: BLE001 - recorded; the batch goes on (or aborts, above)
         log.debug("case %s failed", rc.name, exc_info=True)
         status, message = "failed", _agree(exc, group, err_comm, world, rc, run_dir,
@@ -259,8 +287,8 @@ class _Monitor:
                 old = self.rows[i]["status"]
                 self.rows[i] = case_row(rc, self.out / rc.name, self.skipped[i])
                 changed = True
-                if old != self.rows[i]["status"] and self.rows[i]["status"] in ("complete",
-                                                                                  "failed"):
+                if old != self.rows[i]["status"] and self.rows[i]["status"] in (
+                        "complete", "failed", "interrupted"):
                     self._announce(self.rows[i])
             if changed:
                 head = {**self.head, "elapsed_s": time.monotonic() - self.t0}
@@ -269,7 +297,7 @@ class _Monitor:
 
     def _announce(self, row: dict[str, Any]) -> None:
         wall = f" in {row['wall_s']:.1f} s" if row.get("wall_s") is not None else ""
-        why = f": {row['message']}" if row["status"] == "failed" else ""
+        why = f": {row['message']}" if row["status"] in ("failed", "interrupted") else ""
         self.bar.write(f"batch: case {row['name']} {row['status']}{wall}{why}", file=sys.stderr)
 
     def _show(self) -> None:
@@ -348,17 +376,23 @@ def run_batch(plan: BatchPlan, out: str | Path, ranks_per_case: int = 1,
         monitor = _Monitor(cases, out, skipped, head, progress)
     err_comm = group.Dup()
     options = PETSc.Options().getAll()
+    busy = 0  # cases whose folder another run held (counted by each group's first rank)
     with _quiet_runs(), logging_redirect_tqdm() if monitor and progress else nullcontext():
-        while (index := group.bcast(queue.claim() if group.rank == 0 else None)) is not None:
-            _run_case(cases[index], out / cases[index].name, group, err_comm, comm, options)
+        while (index := group.bcast(queue.claim() if group.rank == 0 and not
+                                    interrupt.requested() else None)) is not None:
+            if not _run_case(cases[index], out / cases[index].name, group, err_comm, comm,
+                             options) and group.rank == 0:
+                busy += 1
         _wait_for_all(comm)
         rows = monitor.finish() if monitor is not None else []
     if comm.rank == 0:
         shutil.rmtree(qdir.parent, ignore_errors=True)
     failed = comm.bcast(counts(rows)["failed"] if comm.rank == 0 else None, root=0)
+    failed += comm.allreduce(busy)
+    signum = comm.allreduce(interrupt.requested(), op=MPI.MAX)
     err_comm.Free()
     group.Free()
-    return BatchResult(rows, failed)
+    return BatchResult(rows, failed, signum)
 
 
 __all__ = ["AGREE_TIMEOUT_S", "BatchResult", "reset_peak_rss", "restore_petsc_options",

@@ -50,7 +50,8 @@ class BatchRow(TypedDict, total=False):
 
     name: str
     status: str
-    """``pending``, ``running``, ``complete`` or ``failed``."""
+    """``pending``, ``running``, ``complete``, ``failed`` or ``interrupted`` (stopped by
+    SIGTERM or SIGINT with a checkpoint; run again from the start by the next batch)."""
     skipped: bool
     """Complete before this batch started (not run again)."""
     message: str | None
@@ -167,7 +168,7 @@ def case_row(rc: ResolvedCase, run_dir: Path, skipped: bool = False) -> BatchRow
                            "estimated_cells": round(rc.cost), "digest": rc.digest}
     start, end = row["start"], row["end"]
     row["wall_s"] = None if start is None or end is None else end - start
-    if status in ("complete", "failed"):
+    if status in ("complete", "failed", "interrupted"):
         row.update(_solver_numbers(run_dir))  # type: ignore[typeddict-item]
         row.update(_results(run_dir))  # type: ignore[typeddict-item]
         if row["wall_s"] is None:
@@ -213,7 +214,7 @@ def csv_text(rows: list[BatchRow]) -> str:
 
 def counts(rows: list[BatchRow]) -> dict[str, int]:
     """How many cases are in each status."""
-    out = {s: 0 for s in ("complete", "failed", "running", "pending")}
+    out = {s: 0 for s in ("complete", "failed", "interrupted", "running", "pending")}
     for r in rows:
         out[r["status"]] = out.get(r["status"], 0) + 1
     return out

@@ -2,12 +2,14 @@
 
 Both run under MPI as they are (``mpirun -n N pilegroup batch PLAN --ranks-per-case k``, or
 ``srun``). Exit codes as the rest of the CLI: 0 every case complete, 1 a case failed, 2 invalid
-input; the one-line message of an invalid input is printed by world rank 0 only.
+input, 143/130 stopped by SIGTERM/SIGINT (the running cases recorded ``interrupted``); the
+one-line message of an invalid input is printed by world rank 0 only.
 """
 
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
 from pilegroup.errors import ScenarioError
@@ -58,16 +60,23 @@ def _print_rows(rows: list[BatchRow]) -> None:
 def _cmd_batch(args: argparse.Namespace) -> int:
     from pilegroup.studies.batch.batch_plan import load_plan
     from pilegroup.studies.batch.execute import run_batch
+    from pilegroup.studies.run.interrupt import signal_name, stop_on_signals
 
     try:
         plan = load_plan(args.plan)
         out = Path(args.out) if args.out else Path("out") / Path(args.plan).stem
-        result = run_batch(plan, out, args.ranks_per_case, progress=not args.no_progress)
+        with stop_on_signals():  # running cases stop at a step boundary, recorded interrupted
+            result = run_batch(plan, out, args.ranks_per_case, progress=not args.no_progress)
     except ScenarioError as exc:
         return _input_error_once(exc)
     if _world_rank() == 0:
         _print_rows(result.rows)
         print(f"batch: {out / 'batch.csv'}, {out / 'batch.json'}")
+        if result.signum:
+            print(f"pilegroup: batch interrupted by {signal_name(result.signum)}; run the plan "
+                  "again to run the cases not complete", file=sys.stderr, flush=True)
+    if result.signum:
+        return 128 + result.signum
     return 1 if result.failed else 0
 
 

@@ -7,6 +7,8 @@ SIGINT/SIGTERM after saving a checkpoint (128 + the signal number).
 Under MPI a :class:`~pilegroup.errors.PilegroupError` is raised on every rank alike (the
 scenario, the stepper's decisions and the Newton checks are collective), so rank 0 prints its
 one line; any other exception may be one rank's alone and ends every rank (:func:`_abort`).
+An output file that cannot be written (:class:`~pilegroup.errors.OutputError`, e.g. a CSV file
+rank 0 writes) is such an exception: ``pilegroup: run failed: cannot write FILE: why``, exit 1.
 """
 
 from __future__ import annotations
@@ -21,7 +23,7 @@ import traceback
 from collections.abc import Sequence
 from pathlib import Path
 
-from pilegroup.errors import RunInterrupted
+from pilegroup.errors import OutputError, RunInterrupted
 from pilegroup.fileio import write_text_atomic
 from pilegroup.model import BUNDLED, PilegroupError, ScenarioError, bundled_text, load_scenario
 from pilegroup.model.loader import parse_override
@@ -45,7 +47,8 @@ def _overrides(args: argparse.Namespace) -> dict[str, object]:
 DESCRIPTIONS = {
     "scenario": "Show a bundled scenario or validate a scenario file.",
     "run": ("Validate the scenario, build its mesh and run every stage that is implemented; write "
-            "outputs and summary.json to --out."),
+            "outputs and summary.json to --out. One run at a time writes into a folder: a "
+            "second run into the --out of a running one exits 2 naming the running process."),
     "mesh": ("Mesh the scenario with gmsh (cap, piles, layered soil; plan quads extruded through "
              "the layers), write mesh.xdmf with cell and facet tags (ParaView), "
              "mesh_summary.json, plan.png and cutaway.png, and print counts and quality. Meshes "
@@ -344,7 +347,8 @@ def _abort(exc: Exception, verbose: bool) -> int:
     where = f"rank {comm.rank} of {comm.size}" if comm.size > 1 else "run"
     if verbose:
         traceback.print_exc()
-    line = f"pilegroup: {where} failed: {type(exc).__name__}: {exc}"
+    what = str(exc) if isinstance(exc, OutputError) else f"{type(exc).__name__}: {exc}"
+    line = f"pilegroup: {where} failed: {what}"
     if comm.size > 1:
         abort_job(line, EXIT_FAILED)
     else:

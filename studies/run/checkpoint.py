@@ -7,8 +7,9 @@ A checkpoint is the folder ``OUT/checkpoint`` (format: docs/checkpoint.md):
   Newton's references, linear solver);
 * ``manifest.json`` (rank 0): format, scenario hash, rank count, mesh cell count and each
   rank's partition fingerprint, the stage loop's state (stage, t, load factor, the stepper's
-  ``dt`` and ``easy``, the run log), what every export needs to continue its files, and the
-  rank files of this generation.
+  ``dt`` and ``easy``, the run log), what every export needs to continue its files, the rank
+  files of this generation with their size and SHA-256, and the SHA-256 of the manifest's own
+  content.
 
 Every file is written under a temporary name and renamed; the rank files of a new generation
 are complete before rank 0 renames the new manifest over the old one, and the files of older
@@ -18,8 +19,11 @@ checkpoint valid. A checkpoint is written at every output time (after the export
 SIGINT: :mod:`pilegroup.studies.run.interrupt`), at the next step boundary.
 
 Resuming needs the same scenario (its hash) and the same rank count: the local arrays fit the
-mesh partition of that rank count only (the fingerprints check it); anything else is refused
-with a :class:`~pilegroup.errors.ScenarioError`.
+mesh partition of that rank count only (the fingerprints check it), and intact files: a
+manifest cut short or changed, a rank file missing, cut short or changed (its SHA-256) is named
+in one line. Anything else is refused with a :class:`~pilegroup.errors.ScenarioError`, raised
+on every rank alike (rank 0 reads the manifest and broadcasts it with its verdict; every rank
+checks its own file and the verdicts are gathered).
 """
 
 from __future__ import annotations
@@ -51,9 +55,15 @@ from pilegroup.studies.run import interrupt
 log = logging.getLogger(__name__)
 
 #: Version of the checkpoint layout (docs/checkpoint.md); another version is not read.
-FORMAT = 1
+FORMAT = 2
 FOLDER = "checkpoint"
 MANIFEST = "manifest.json"
+#: The manifest's key of the SHA-256 of its other keys (canonical JSON: keys sorted).
+SEAL = "manifest_sha256"
+#: Keys every manifest of :data:`FORMAT` has; one missing means the file is damaged.
+MANIFEST_KEYS = ("format", "scenario_sha256", "ranks", "generation", "reason", "written",
+                 "t_day", "stage", "cells", "fingerprints", "files", "sha256", "bytes", "state",
+                 "exports", SEAL)
 #: Scenario keys that do not change the computed state (left out of the scenario hash).
 UNHASHED = (("outputs", "plots"), ("outputs", "checkpoint_every_min"))
 
@@ -71,6 +81,72 @@ def scenario_sha256(sc: Scenario) -> str:
     return hashlib.sha256(text.encode()).hexdigest()
 
 
+def _canonical_sha256(data: dict[str, Any]) -> str:
+    """SHA-256 of ``data`` as JSON with sorted keys (floats by ``repr``: exact round trip)."""
+    return hashlib.sha256(json.dumps(data, sort_keys=True).encode()).hexdigest()
+
+
+def seal(manifest: dict[str, Any]) -> dict[str, Any]:
+    """``manifest`` as JSON reads it back, with :data:`SEAL`: the SHA-256 of its content."""
+    body = json.loads(json.dumps(manifest, default=json_default))
+    return {**body, SEAL: _canonical_sha256(body)}
+
+
+def file_sha256(path: Path) -> str:
+    """SHA-256 of the file at ``path``."""
+    with open(path, "rb") as f:
+        return hashlib.file_digest(f, "sha256").hexdigest()
+
+
+def _manifest_problem(path: Path) -> tuple[dict[str, Any] | None, str | None]:
+    """The manifest at ``path`` and what is wrong with it (``None``: nothing, or no file)."""
+    if not path.exists():
+        return None, None
+    try:
+        raw = path.read_bytes()
+        m = json.loads(raw.decode("utf-8"))
+    except OSError as exc:
+        return None, f"cannot be read ({exc.strerror})"
+    except UnicodeDecodeError as exc:
+        return None, f"is damaged (not UTF-8 text at byte {exc.start} of {len(raw)})"
+    except json.JSONDecodeError as exc:
+        return None, (f"is cut short or damaged (not valid JSON at byte {exc.pos} of "
+                      f"{len(raw)})")
+    if not isinstance(m, dict):
+        return None, "is damaged (not a JSON object)"
+    if "format" not in m:
+        return None, "is damaged (no 'format')"
+    if m["format"] != FORMAT:
+        return m, None  # check_resume names the format
+    missing = [k for k in MANIFEST_KEYS if k not in m]
+    if missing:
+        return None, f"is damaged (no {missing[0]!r})"
+    if _canonical_sha256({k: v for k, v in m.items() if k != SEAL}) != m[SEAL]:
+        return None, f"is damaged (its content does not match its {SEAL})"
+    return m, None
+
+
+def _rank_file_problem(path: Path, sha256: str, size: int) -> str | None:
+    """What is wrong with the rank file at ``path`` (size and SHA-256 of the manifest)."""
+    try:
+        found = path.stat().st_size
+        if found != size:
+            how = "cut short" if found < size else "damaged"
+            return f"is {how} ({found} bytes, the manifest says {size})"
+        if file_sha256(path) != sha256:
+            return "is damaged (its SHA-256 differs from the manifest's)"
+    except FileNotFoundError:
+        return "is missing"
+    except OSError as exc:
+        return f"cannot be read ({exc.strerror})"
+    return None
+
+
+def _refuse(out: Path, what: str) -> ScenarioError:
+    """The error of a checkpoint that cannot be resumed from because ``what``."""
+    return ScenarioError("--resume", str(out), f"{what}; run without --resume to start again")
+
+
 def _bcast_json(path: Path, comm: MPI.Comm) -> dict[str, Any] | None:
     """The JSON object in ``path`` read on rank 0 (``None`` when missing or unreadable)."""
     data = None
@@ -86,10 +162,14 @@ def check_resume(out: Path, sc: Scenario, comm: MPI.Comm) -> dict[str, Any]:
     """The manifest of ``out``'s checkpoint, if ``sc`` on ``comm`` can resume from it.
 
     Raises :class:`~pilegroup.errors.ScenarioError` (on every rank alike) when there is no
-    checkpoint, it has another format, or was written for another scenario or rank count.
+    checkpoint, it has another format, was written for another scenario or rank count, or a
+    file of it is damaged, cut short or missing (the message names the file).
     """
     folder = Path(out) / FOLDER
-    m = _bcast_json(folder / MANIFEST, comm)
+    m, problem = comm.bcast(_manifest_problem(folder / MANIFEST) if comm.rank == 0 else None,
+                            root=0)
+    if problem is not None:
+        raise _refuse(out, f"checkpoint file {folder / MANIFEST} {problem}")
     if m is None:
         raise ScenarioError("--resume", str(out), f"no checkpoint in {folder} (a run writes "
                             "one at its first output time); run without --resume")
@@ -103,6 +183,12 @@ def check_resume(out: Path, sc: Scenario, comm: MPI.Comm) -> dict[str, Any]:
         raise ScenarioError("--resume", f"{comm.size} rank(s)", f"the checkpoint in {folder} "
                             f"was written by {m['ranks']} rank(s) and resumes on as many only "
                             "(its state is saved per rank, for that mesh partition)")
+    mine = folder / m["files"][comm.rank]
+    problem = _rank_file_problem(mine, m["sha256"][comm.rank], m["bytes"][comm.rank])
+    problem = next((p for p in comm.allgather(problem and f"checkpoint file {mine} {problem}")
+                    if p), None)
+    if problem is not None:
+        raise _refuse(out, problem)
     return m
 
 
@@ -176,12 +262,11 @@ class Checkpoints:
         """Write a checkpoint of the problem, ``state`` and the exports (collective)."""
         t0 = time.perf_counter()
         comm, gen = self.comm, self.generation + 1
-        self.folder.mkdir(parents=True, exist_ok=True)
         name = f"state-{gen:06d}-rank{comm.rank:04d}.npz"
         with atomic_path(self.folder / name) as tmp:
             np.savez(tmp, **problem_state(self.pb))
-        size = (self.folder / name).stat().st_size
-        files = comm.gather(name, root=0)  # every rank's file is complete once gathered
+            sha, size = file_sha256(tmp), tmp.stat().st_size
+        files = comm.gather((name, sha, size), root=0)  # each file is complete once gathered
         fingerprints = comm.gather(self.fingerprint, root=0)
         total = comm.reduce(size, op=MPI.SUM, root=0)
         if comm.rank == 0:
@@ -191,10 +276,11 @@ class Checkpoints:
                 "written": time.strftime("%Y-%m-%dT%H:%M:%S"),
                 "t_day": state.t, "stage": self.stage_names[state.stage],
                 "cells": _cells(self.pb),
-                "fingerprints": fingerprints, "files": files,
+                "fingerprints": fingerprints, "files": [f[0] for f in files],
+                "sha256": [f[1] for f in files], "bytes": [f[2] for f in files],
                 "state": dataclasses.asdict(state),
                 "exports": {k: e.saved_state() for k, e in self.exports.items()}}
-            write_json_atomic(self.folder / MANIFEST, manifest)
+            write_json_atomic(self.folder / MANIFEST, seal(manifest))
             total += (self.folder / MANIFEST).stat().st_size
         comm.barrier()  # the new manifest is in place: older generations can go
         mine = f"state-*-rank{comm.rank:04d}.npz"

@@ -19,6 +19,7 @@ from pilegroup.model import Scenario
 from pilegroup.studies.report.run_report import write_report
 from pilegroup.studies.results.records import JobSummary, write_job_summary
 from pilegroup.studies.run.checkpoint import check_resume, completed_summary, remove_checkpoint
+from pilegroup.studies.run.folder_lock import folder_lock
 from pilegroup.studies.run.pipeline import run_coupled
 
 log = logging.getLogger(__name__)
@@ -40,6 +41,10 @@ def run_scenario(sc: Scenario, out: Path, mesh_size: float | None = None,
     :class:`~pilegroup.errors.ScenarioError`); a run whose ``summary.json`` says complete is
     not run again (its summary is returned). Without it, an older checkpoint in ``out`` is
     removed first.
+
+    The run holds the lock of ``out`` for its life
+    (:func:`~pilegroup.studies.run.folder_lock.folder_lock`): while another run holds it,
+    :class:`~pilegroup.errors.FolderBusy` is raised before anything is read or written.
     """
     t0 = time.perf_counter()
     if mesh_size is not None:
@@ -47,6 +52,13 @@ def run_scenario(sc: Scenario, out: Path, mesh_size: float | None = None,
             sc.numerics, mesh=dataclasses.replace(sc.numerics.mesh, size_m=mesh_size)))
     if resume and stop_after != "solve":
         raise ScenarioError("--stop-after", stop_after, "only 'solve' with --resume")
+    with folder_lock(out, comm):
+        return _locked_run(sc, out, stop_after, comm, resume, t0)
+
+
+def _locked_run(sc: Scenario, out: Path, stop_after: str, comm: MPI.Comm, resume: bool,
+                t0: float) -> JobSummary:
+    """:func:`run_scenario` once the folder is locked."""
     manifest = check_resume(out, sc, comm) if resume else None
     if manifest is not None:
         done = completed_summary(out, comm)
@@ -63,6 +75,9 @@ def run_scenario(sc: Scenario, out: Path, mesh_size: float | None = None,
     geo = resolve_geometry(sc)  # the one resolution of the scenario's geometry in a run
     try:
         summary = _run(sc, geo, out, stop_after, comm, t0, manifest)
+        if comm.rank == 0 and summary["solver"] is not None and sc.outputs.plots:
+            for path in write_report(out):  # a figure not written fails the run too
+                log.info("wrote %s", path)
     except RunInterrupted as exc:
         _write_interrupted(out, sc, comm, exc, t0)
         raise
@@ -71,9 +86,6 @@ def run_scenario(sc: Scenario, out: Path, mesh_size: float | None = None,
         if isinstance(exc, PilegroupError) and comm.rank == 0 and sc.outputs.plots:
             _plots_of_what_was_reached(out)
         raise
-    if comm.rank == 0 and summary["solver"] is not None and sc.outputs.plots:
-        for path in write_report(out):
-            log.info("wrote %s", path)
     return summary
 
 
@@ -112,7 +124,7 @@ def _write_interrupted(out: Path, sc: Scenario, comm: MPI.Comm, exc: RunInterrup
                        t0: float) -> None:
     """``summary.json`` with ``status = "interrupted"``: the signal, time reached, checkpoint."""
     if comm.rank == 0:
-        write_job_summary(out, {
+        _write_summary_of_stop(out, {
             "scenario": sc.name, "status": "interrupted", "signal": exc.signal_name,
             "t_day": exc.t, "stage": exc.stage, "checkpoint": exc.checkpoint,
             "resume": "pilegroup run SCENARIO --out OUT --resume (same scenario, --set "
@@ -131,9 +143,20 @@ def _write_failure(out: Path, sc: Scenario, comm: MPI.Comm, exc: BaseException,
     collective = isinstance(exc, PilegroupError)
     if collective and comm.rank != 0:
         return
-    write_job_summary(out, {
+    _write_summary_of_stop(out, {
         "scenario": sc.name, "status": "failed",
         "reason": f"{type(exc).__name__}: {exc}",
         "rank": None if collective else comm.rank, "ranks": comm.size,
         "wall_s": time.perf_counter() - t0,
         "solver_summary": "summary_solver.json (written up to the last output time)"})
+
+
+def _write_summary_of_stop(out: Path, summary: JobSummary) -> None:
+    """``summary.json`` of a run that stopped; a warning if it cannot be written.
+
+    The stop's own error stays the one reported.
+    """
+    try:
+        write_job_summary(out, summary)
+    except OSError as exc:
+        log.warning("no summary.json of the stopped run: %s", exc)

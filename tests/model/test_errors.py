@@ -78,3 +78,32 @@ def test_the_error_class_says_who_rejected_the_value():
         ElasticSolid(E=1.0, nu=0.5)
     with pytest.raises(SolverInputError, match="must be one of 'a', 'b'"):
         require_one_of("choice", "c", ("a", "b"), error=SolverInputError)
+
+
+def test_a_long_value_is_shortened_in_messages():
+    from pilegroup.errors import describe
+
+    msg = str(ScenarioError("scenario.name", "x" * 10_000, "must be at most 64 characters"))
+    assert msg == f"scenario.name = '{'x' * 59}... (10000 characters): must be at most 64 " \
+        "characters"
+    long_list = list(range(5000))
+    shown = describe("time.output_days", long_list, "too many")
+    assert shown.startswith("time.output_days = [0, 1, 2,") and len(shown) < 130
+    assert f"... ({len(str(long_list))} characters): too many" in shown
+    assert describe("k", "short", "ok") == "k = 'short': ok"  # short values unchanged
+
+
+def test_a_scenario_file_that_is_not_utf8_is_invalid_input(tmp_path, capsys):
+    from pilegroup.model import load_scenario
+    from pilegroup.studies.cli.commands import main
+
+    f = tmp_path / "latin1.toml"
+    f.write_bytes('[scenario]\nname = "Müller"\n'.encode("latin-1"))
+    with pytest.raises(ScenarioError, match=re.escape(
+            f"file = '{f}': is not UTF-8 text (byte 20 of 27 is 0xfc); save it as UTF-8 TOML")):
+        load_scenario(f)
+    assert main(["run", str(f), "--out", str(tmp_path / "run")]) == 2
+    lines = capsys.readouterr().err.splitlines()
+    assert lines == [f"pilegroup: invalid input: file = '{f}': is not UTF-8 text (byte 20 of 27 "
+                     "is 0xfc); save it as UTF-8 TOML"]
+    assert main(["scenario", "validate", str(f)]) == 2

@@ -69,6 +69,13 @@ BROKEN = [
      "interface.quadrature", "one of 'nodal', 'gauss'"),
     ("output-after-end", "output_days = [0.0, 1.0, 30.0, 89.0, 180.0, 317.0]",
      "output_days = [0.0, 400.0]", 1, "time.output_days[1]", "end_day"),
+    ("output-unsorted", "output_days = [0.0, 1.0, 30.0, 89.0, 180.0, 317.0]",
+     "output_days = [0.0, 30.0, 1.0, 317.0]", 1, "time.output_days[2]",
+     "= 1.0 (day): must be > 30, the time before it: output times are listed in increasing "
+     "order, each once"),
+    ("output-twice", "output_days = [0.0, 1.0, 30.0, 89.0, 180.0, 317.0]",
+     "output_days = [0.0, 1.0, 1.0, 317.0]", 1, "time.output_days[2]",
+     "= 1.0 (day): must be > 1, the time before it"),
 ]
 
 

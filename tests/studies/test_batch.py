@@ -110,6 +110,48 @@ def test_killed_batch_resumes_and_skips_the_finished_case(tmp_path, small_pile):
     assert "first: complete (complete before, skipped)" in r.stdout
 
 
+def _record(run):
+    path = run / "batch_case.json"
+    try:
+        return json.loads(path.read_text())
+    except (OSError, ValueError):
+        return {}
+
+
+@pytest.mark.parametrize("ranks", [1, pytest.param(2, marks=pytest.mark.mpi)])
+def test_sigterm_records_the_running_case_interrupted(tmp_path, small_pile, ranks):
+    """SIGTERM (to mpirun: forwarded to every rank) stops the running cases at a step
+    boundary; their records say interrupted, no other case starts, exit 143."""
+    plan = _plan(small_pile, f'[[case]]\nname = "slow"\nset = {SLOW}\n'
+                 f'[[case]]\nname = "next"\nset = {SLOW}\n')
+    out = tmp_path / "batch"
+    proc = subprocess.Popen(_command(plan, out, ranks=ranks, per_case=ranks),
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+                            env=_env(tmp_path))
+    try:
+        deadline = time.monotonic() + 240
+        while not any(_record(out / c).get("status") == "running" for c in ("slow", "next")):
+            assert proc.poll() is None and time.monotonic() < deadline
+            time.sleep(0.02)
+        proc.send_signal(signal.SIGTERM)
+        _, stderr = proc.communicate(timeout=240)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == 143, stderr[-3000:]
+    assert [ln for ln in stderr.splitlines() if ln.startswith("pilegroup:")] == [
+        "pilegroup: batch interrupted by SIGTERM; run the plan again to run the cases not "
+        "complete"]
+    records = {c: _record(out / c) for c in ("slow", "next")}
+    started = [c for c, r in records.items() if r]
+    assert len(started) == 1, records  # the other case was not taken after the signal
+    rec = records[started[0]]
+    assert rec["status"] == "interrupted" and rec["message"].startswith(
+        "interrupted by SIGTERM at t = ")
+    assert _summary(out / started[0])["status"] == "interrupted"
+    assert _cases(out)[started[0]]["status"] == "interrupted"
+
+
 def test_a_failed_case_leaves_the_other_and_exits_1(tmp_path, small_pile, monkeypatch, capsys):
     monkeypatch.setenv("PILEGROUP_MESH_CACHE", str(tmp_path / "cache"))
     plan = _plan(small_pile, f'[[case]]\nname = "ok"\n[[case]]\nname = "diverges"\n'
