@@ -14,6 +14,7 @@ from pilegroup.errors import ScenarioError
 from pilegroup.model.bounds import check_bound
 from pilegroup.validate import (
     is_finite_number,
+    require_finite,
     require_in_range,
     require_non_negative,
     require_one_of,
@@ -61,6 +62,7 @@ STAGE_KEYS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
     "consolidation": ((), ("until_day",)),
     "surcharge": (("surcharge_kPa", "duration_day"), ("area_m",)),
     "groundwater": (("drawdown_m", "duration_day"), ()),
+    "installation": ((), ()),
 }
 _STAGE_UNITS = {"cap_load_kN": "kN", "duration_day": "day", "until_day": "day",
                 "surcharge_kPa": "kPa", "area_m": "m", "drawdown_m": "m"}
@@ -76,12 +78,15 @@ class Stage:
     ``surcharge`` (a pressure ``surcharge_kPa`` placed on the ground surface over
     ``duration_day``: a fill or an embankment, over the whole surface or the rectangle
     ``area_m``, never beneath the cap, and held afterwards) or ``groundwater`` (the water
-    table lowered by ``drawdown_m`` over ``duration_day``, held afterwards). Every action keeps
-    its value in the stages that follow; docs/model.md ("Ground that moves") gives the physics.
+    table lowered by ``drawdown_m`` over ``duration_day``, held afterwards) or ``installation``
+    (the moment the piles and cap are installed, instantaneous: before it the ground moves
+    without them). Every action keeps its value in the stages that follow; docs/model.md
+    ("Ground that moves") gives the physics.
     """
 
     name: str
-    kind: Literal["geostatic", "load", "consolidation", "surcharge", "groundwater"]
+    kind: Literal["geostatic", "load", "consolidation", "surcharge", "groundwater",
+                  "installation"]
     cap_load_kN: float | None = None
     """Load stage: the vertical cap load at the stage end, kN."""
     duration_day: float | None = None
@@ -110,10 +115,12 @@ class Stage:
         if self.cap_load_kN is not None:
             require_non_negative("cap_load_kN", self.cap_load_kN, "kN")
             check_bound("stages.cap_load_kN", self.cap_load_kN)
-        for key in ("duration_day", "until_day"):
-            if getattr(self, key) is not None:
-                require_positive(key, getattr(self, key), "day")
-                check_bound(f"stages.{key}", getattr(self, key))
+        if self.duration_day is not None:
+            require_positive("duration_day", self.duration_day, "day")
+            check_bound("stages.duration_day", self.duration_day)
+        if self.until_day is not None:  # a day on the analysis's time axis (may be < 0)
+            require_finite("until_day", self.until_day, "day")
+            check_bound("stages.until_day", self.until_day)
         for key in ("surcharge_kPa", "drawdown_m"):
             if getattr(self, key) is not None:
                 if not is_finite_number(getattr(self, key)) or getattr(self, key) == 0.0:
@@ -131,18 +138,26 @@ class Stage:
 
 @dataclass(frozen=True)
 class Time:
-    """End time of the analysis and the times at which outputs are written (day)."""
+    """Start and end of the analysis and the times at which outputs are written (day).
+
+    Day 0 is the piles' installation when a stage of kind ``installation`` says when (the
+    ground may move from ``start_day < 0`` on); otherwise the analysis starts at 0.
+    """
 
     end_day: float
     output_days: tuple[float, ...] = ()
+    start_day: float = 0.0
+    """The geostatic state's day, <= 0 (negative: the ground moves before day 0)."""
 
     def __post_init__(self) -> None:
         require_positive("end_day", self.end_day, "day")
         check_bound("time.end_day", self.end_day)
+        require_finite("start_day", self.start_day, "day")
+        check_bound("time.start_day", self.start_day)
         for i, t in enumerate(self.output_days):
-            if not 0.0 <= t <= self.end_day:
-                raise ScenarioError(f"output_days[{i}]", t, f"must be in [0, end_day = "
-                                    f"{self.end_day:g}]", "day")
+            if not self.start_day <= t <= self.end_day:
+                raise ScenarioError(f"output_days[{i}]", t, f"must be in [start_day = "
+                                    f"{self.start_day:g}, end_day = {self.end_day:g}]", "day")
         for i in range(1, len(self.output_days)):
             if not self.output_days[i - 1] < self.output_days[i]:
                 raise ScenarioError(f"output_days[{i}]", self.output_days[i], "must be > "

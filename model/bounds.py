@@ -93,9 +93,12 @@ BOUNDS: dict[str, Bound] = {
                                "pumping lowers the water table by metres to tens of metres;"
                                " negative: it rises"),
     "stages.duration_day": Bound(1.0e-9, 1.0e5, "day", _DT),
-    "stages.until_day": Bound(1.0e-9, 1.0e5, "day", _DT),
+    "stages.until_day": Bound(-1.0e5, 1.0e5, "day", "a day of the analysis, like time.end_day;"
+                              " before the piles (time.start_day < 0) it may be negative"),
     "time.end_day": Bound(1.0e-9, 1.0e5, "day",
                           "design lives are <= ~120 years; 1e5 days is 274 years"),
+    "time.start_day": Bound(-1.0e5, 0.0, "day",
+                            "fills and drawdown before the piles: up to ~274 years earlier"),
     "numerics.time.dt_initial_day": Bound(1.0e-9, 1.0e5, "day", _DT),
     "numerics.time.dt_min_day": Bound(1.0e-9, 1.0e5, "day", _DT),
     "numerics.time.dt_max_day": Bound(1.0e-9, 1.0e5, "day", _DT),

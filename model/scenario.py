@@ -41,6 +41,7 @@ class Scenario:
         self._check_plan()
         self._check_cap()
         self._check_stages()
+        self._check_installation()
         self._check_excess_pore_pressure()
         self._check_interfaces()
         self._check_gauges()
@@ -132,6 +133,28 @@ class Scenario:
                 "'viscoplastic' the cap is free of the soil (false); a cap-soil interface is "
                 "not modelled", "-")
 
+    def _check_installation(self) -> None:
+        """At most one installation stage; every cap load after it; an interface to engage."""
+        kinds = [st.kind for st in self.stages]
+        if "installation" not in kinds:
+            return
+        i = kinds.index("installation")
+        if "installation" in kinds[i + 1:]:
+            j = kinds.index("installation", i + 1)
+            raise ScenarioError(f"stages[{j}].kind", "installation",
+                                f"the piles are installed once (stages[{i}] already installs"
+                                " them)")
+        if "load" in kinds[:i]:
+            j = kinds.index("load")
+            raise ScenarioError(f"stages[{j}].kind", "load",
+                                f"a cap load before the piles exist: put it after the"
+                                f" installation stage stages[{i}]")
+        if self.interface.mode == "tied":
+            raise ScenarioError("interface.mode", "tied",
+                                "an installation stage needs interface.mode 'elastic' or"
+                                " 'viscoplastic' (before it the soil moves past the piles'"
+                                " place; tied piles move with it from the start)")
+
     def _check_stages(self) -> None:
         """One geostatic stage first; the other stages end by ``time.end_day``; areas fit."""
         if not self.stages:
@@ -139,7 +162,7 @@ class Scenario:
         if self.stages[0].kind != "geostatic":
             raise ScenarioError("stages[0].kind", self.stages[0].kind,
                                 "the first stage must be 'geostatic'")
-        t = 0.0
+        t = self.time.start_day
         for i, st in enumerate(self.stages):
             if i > 0 and st.kind == "geostatic":
                 raise ScenarioError(f"stages[{i}].kind", st.kind,
@@ -245,11 +268,16 @@ class Scenario:
         return tuple([0.0] + [self.layer_bottom(i) for i in range(len(self.layers))])
 
     def stage_times(self) -> tuple[tuple[Stage, float, float], ...]:
-        """Each stage with its start and end time (day); the geostatic stage spans (0, 0)."""
-        out, t = [], 0.0
+        """Each stage with its start and end time (day).
+
+        The geostatic stage and an installation stage are instants (start = end); the first
+        starts at ``time.start_day``.
+        """
+        t = self.time.start_day
+        out = []
         for st in self.stages:
-            if st.kind == "geostatic":
-                out.append((st, 0.0, 0.0))
+            if st.kind in ("geostatic", "installation"):
+                out.append((st, t, t))
             elif st.duration_day is not None:
                 out.append((st, t, t + st.duration_day))
                 t += st.duration_day

@@ -59,6 +59,25 @@ class Constraints:
             if (pbc.facet is not None or pbc.cells is not None) and not pbc.in_undrained_steps:
                 self._drain.update({id(bc), id(bc0)})
         self.plate = RigidPlateControl(self, layout, plates[0], interface) if plates else None
+        self._held: set[int] = set()
+        self.installed = True
+
+    def hold(self, layout: BlockLayout, role: str) -> None:
+        """Hold every displacement of body ``role`` at zero until :attr:`installed` is set.
+
+        A structure installed after the start (``BiotProblem(install_later=True)``) is held
+        still while the ground moves without it.
+        """
+        b = layout.body(role)
+        tdim = layout.mesh.topology.dim
+        b.mesh.topology.create_connectivity(tdim, tdim)
+        imap = b.mesh.topology.index_map(tdim)
+        cells = np.arange(imap.size_local + imap.num_ghosts, dtype=np.int32)
+        for c in range(3):
+            dofs = fem.locate_dofs_topological(b.V.sub(c), tdim, cells)
+            bc, bc0 = self.add(dofs, b.V.sub(c), default_scalar_type(0.0), b.u)
+            self._held.update({id(bc), id(bc0)})
+        self.installed = False
 
     def add(self, dofs: np.ndarray, V: fem.FunctionSpace, value: fem.Constant | float,
              target: fem.Function) -> tuple[fem.DirichletBC, fem.DirichletBC]:
@@ -86,15 +105,18 @@ class Constraints:
             c.value = pbc.value * amplitudes[pbc.action]  # type: ignore[index]
 
     def active(self, bcs: list[fem.DirichletBC], undrained: bool) -> list[fem.DirichletBC]:
-        """The conditions in force in the step (drainage released when undrained)."""
-        if not undrained:
-            return bcs
-        return [bc for bc in bcs if id(bc) not in self._drain]
+        """The conditions in force in the step.
+
+        Drainage is released in an undrained step, a held body once installed.
+        """
+        out = [bc for bc in bcs if id(bc) not in self._drain] if undrained else bcs
+        return [bc for bc in out if id(bc) not in self._held] if self.installed else out
 
     def apply_values(self, undrained: bool) -> None:
         """Put the prescribed values into the fields; Newton increments then vanish there."""
         for bc, f in self._targets:
-            if not (undrained and id(bc) in self._drain):
+            if not (undrained and id(bc) in self._drain) and not (
+                    self.installed and id(bc) in self._held):
                 bc.set(f.x.array)
 
 

@@ -417,8 +417,10 @@ class SolverStage:
             ``"load"`` (load factor ramped linearly from its previous value to ``load_factor``
             over ``duration``; ``duration = 0`` is one instantaneous, undrained step),
             ``"ground"`` (the ground actions ramped linearly to ``ground`` over ``duration``,
-            the load factor held; ``duration = 0`` is instantaneous) or ``"consolidation"``
-            (every action held to the stage end).
+            the load factor held; ``duration = 0`` is instantaneous), ``"consolidation"``
+            (every action held to the stage end) or ``"install"`` (the structure, held still
+            and free of the soil's shear until then, joins the soil: the problem's
+            ``install_structure``; an instant).
         duration: day.
         load_factor: load factor at the end of a load stage (loads with ``ramp``).
         ground: a ground stage's amplitudes of the ground actions at its end (the ``action``
@@ -428,15 +430,18 @@ class SolverStage:
     """
 
     name: str
-    kind: Literal["geostatic", "load", "ground", "consolidation"]
+    kind: Literal["geostatic", "load", "ground", "consolidation", "install"]
     duration: float = 0.0
     load_factor: float = 1.0
     ground: tuple[float, ...] = ()
     dt0: float | None = None
 
     def __post_init__(self) -> None:
-        if self.kind not in ("geostatic", "load", "ground", "consolidation"):
+        if self.kind not in ("geostatic", "load", "ground", "consolidation", "install"):
             raise SolverInputError(f"stage {self.name!r}: kind = {self.kind!r}")
+        if self.kind == "install" and self.duration != 0.0:
+            raise SolverInputError(f"stage {self.name!r}: an install stage is an instant"
+                                   f" (duration = {self.duration!r}; allowed: 0)")
         if self.ground and self.kind != "ground":
             raise SolverInputError(f"stage {self.name!r}: ground amplitudes need kind 'ground'")
         require_non_negative(f"stage {self.name!r} duration", self.duration, "day",

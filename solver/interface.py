@@ -36,6 +36,7 @@ from __future__ import annotations
 
 import functools
 from collections.abc import Callable, Sequence
+from typing import Any
 
 import numpy as np
 import ufl
@@ -159,6 +160,11 @@ class NodalInterface:
         self.D = fem.Function(Tsp, name="interface_tangent")
         self.jump = fem.Function(V_soil, name="interface_jump")
         self._jump_committed = np.zeros_like(self.jump.x.array)
+        #: the jump when the laws were engaged (:meth:`activate`); outputs count from it
+        self._jump_origin = np.zeros_like(self._jump_committed)
+        #: whether the laws act; inactive, the interface carries its committed traction only
+        #: (a structure not yet installed: ``BiotProblem(install_later=True)``)
+        self.active = True
         self._u_struct: fem.Function | None = None
         self._jump_form: fem.Form | None = None
         self.last_error = ""  # message of the last law failure on this rank
@@ -300,7 +306,7 @@ class NodalInterface:
                 continue
             R = g.R
             d_loc = np.einsum("nij,nj->ni", R, d_jump[nodes])
-            t_loc, trial, D_loc, error = guarded_update(g.law, d_loc, g.state, dt)
+            t_loc, trial, D_loc, error = self._law(g, d_loc, dt)
             if error:
                 self.last_error = f"interface group {m}: {error}"
             g.trial = trial
@@ -312,6 +318,42 @@ class NodalInterface:
                                                              c[:, :, None] * D_loc, R))
         self.T.x.array[:] = T.ravel()
         self.D.x.array[:] = D.ravel()
+
+    def _law(self, g: Any, d_loc: np.ndarray, dt: float
+             ) -> tuple[np.ndarray, dict[str, np.ndarray], np.ndarray, str]:
+        """Group ``g``'s law at local jump increments ``d_loc``.
+
+        Returns traction, trial state, tangent and error; inactive: the committed traction and
+        state, no stiffness.
+        """
+        if self.active:
+            return guarded_update(g.law, d_loc, g.state, dt)
+        return (g.state["traction"].copy(), g.state, np.zeros((d_loc.shape[0], 3, 3)), "")
+
+    def law_points(self, m: int) -> np.ndarray:
+        """Coordinates (m) of group ``m``'s law points (here: its interface nodes)."""
+        return self._soil_coords[self.groups[m].nodes]
+
+    def activate(self, extra_normal: Callable[[np.ndarray], np.ndarray]) -> None:
+        """Engage the laws from now on (a structure installed after the start).
+
+        Each law starts afresh (no slip) at the traction it carried, its normal component plus
+        ``extra_normal(x)`` (kPa, tension positive; e.g. the installation's excess pore
+        pressure, which the soil's effective stress loses at the same instant); jump increments
+        and the output jumps count from the current jump.
+        """
+        self._jump_origin[:] = self._jump_committed
+        for m, g in enumerate(self.groups):
+            if g.state is None:
+                continue
+            t = np.array(g.state["traction"], dtype=float)
+            t[:, 0] += extra_normal(self.law_points(m))
+            g.state = g.trial = g.law.initial_state(t.shape[0], t)
+        self.active = True
+
+    def committed_jump(self) -> np.ndarray:
+        """The committed jump ``u_soil - u_structure`` since the laws were engaged, ``(n, 3)``."""
+        return (self._jump_committed - self._jump_origin).reshape(-1, 3)
 
     def commit(self) -> None:
         """Adopt the trial state of the last :meth:`update` (after a converged step)."""
@@ -333,6 +375,7 @@ class NodalInterface:
         out = {f"{m}/{k}": v for m, g in enumerate(self.groups) if g.state is not None
                for k, v in g.state.items()}
         out["jump"] = self._jump_committed.copy()
+        out["jump_origin"] = self._jump_origin.copy()
         return out
 
     def restore_state(self, arrays: dict[str, np.ndarray]) -> None:
@@ -351,6 +394,7 @@ class NodalInterface:
             g.state = g.trial = state
         self._jump_committed[:] = arrays["jump"]
         self.jump.x.array[:] = arrays["jump"]
+        self._jump_origin[:] = arrays.get("jump_origin", 0.0)
 
     # ---------- output ----------
     FIELDS = {"normal_traction": 1, "shear_traction_vertical": 1,
@@ -369,11 +413,12 @@ class NodalInterface:
         ``shear_traction_circumferential``, ``opening`` (m, positive = gap), ``slip_vertical``
         (m, positive = soil moves up relative to the pile), ``slip_circumferential``,
         ``viscoplastic_slip`` (m, magnitude), ``detached`` (0..1); ``jump`` is the global
-        ``u_soil - u_structure`` (m). Zero away from the interface.
+        ``u_soil - u_structure`` (m). Jumps count from the laws' engagement (the start, or a
+        later installation). Zero away from the interface.
         """
         n = self.A.size
         out = {k: np.zeros((n, c)) for k, c in self.FIELDS.items()}
-        jump = self._jump_committed.reshape(-1, 3)
+        jump = self.committed_jump()
         out["jump"][:] = jump
         for g in self.groups:
             nodes = g.nodes
@@ -408,7 +453,7 @@ class NodalInterface:
         g = self.groups[m]
         nodes = g.nodes
         own = nodes < self.V_soil.dofmap.index_map.size_local
-        jump = self._jump_committed.reshape(-1, 3)[nodes]
+        jump = self.committed_jump()[nodes]
         return InterfacePoints(weight=np.where(own, self.W[nodes, m], 0.0),
                                x=self._soil_coords[nodes], node=nodes, state=g.state,
                                jump_local=np.einsum("nij,nj->ni", g.R, jump))

@@ -20,7 +20,6 @@ from petsc4py import PETSc
 from pilegroup.geometry.meshdata import MeshData
 from pilegroup.solver.interface import BASE, SHAFT, NodalInterface
 from pilegroup.solver.interface_groups import GaussGroup, InterfacePoints
-from pilegroup.solver.qpstate import guarded_update
 
 # 2 x 2 Gauss rule on the unit square (s, t) in [0, 1]^2, weights 1/4, and the bilinear shape
 # functions of the facet nodes in basix's tensor order (s, t) = (0,0), (1,0), (0,1), (1,1).
@@ -154,7 +153,7 @@ class GaussInterface(NodalInterface):
                 continue
             R = g.R
             d_loc = np.einsum("nij,nj->ni", R, self._at_points(g, d_jump))
-            t_loc, trial, D_loc, error = guarded_update(g.law, d_loc, g.state, dt)
+            t_loc, trial, D_loc, error = self._law(g, d_loc, dt)
             if error:
                 self.last_error = f"interface group {m}: {error}"
             g.trial = trial
@@ -211,7 +210,7 @@ class GaussInterface(NodalInterface):
         point's facet.
         """
         g = self.groups[m]
-        jump = self._at_points(g, self._jump_committed.reshape(-1, 3))
+        jump = self._at_points(g, self.committed_jump())
         return InterfacePoints(weight=g.wJ.ravel(), x=g.x, node=np.repeat(g.fnodes[:, 0], 4),
                                state=g.state, jump_local=np.einsum("nij,nj->ni", g.R, jump))
 
@@ -239,5 +238,9 @@ class GaussInterface(NodalInterface):
         w = acc[:, -1:]
         avg = np.divide(acc[:, :-1], w, out=np.zeros((n, len(keys))), where=w > 0)
         out = {k: avg[:, i:i + 1].copy() for i, k in enumerate(keys)}
-        out["jump"] = self._jump_committed.reshape(-1, 3).copy()
+        out["jump"] = self.committed_jump().copy()
         return out
+
+    def law_points(self, m: int) -> np.ndarray:
+        """Coordinates (m) of group ``m``'s law points (its Gauss points)."""
+        return self.groups[m].x

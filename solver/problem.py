@@ -4,7 +4,8 @@ Physics and units: docs/model.md (kN, m, day; tension positive; ``p`` = excess p
 compression of the water positive; effective stress ``sigma' = sigma + p I``). The weak form is
 built term by term in :mod:`.forms`; bodies, spaces and block layout in :mod:`.layout`;
 boundary conditions and the rigid plate in :mod:`.constraints`; the geostatic state in
-:mod:`.geostatic`; Newton in :mod:`.newton`.
+:mod:`.geostatic` and :mod:`.initial_state`; the matrices, assembly and linear solves in
+:mod:`.algebra`; Newton in :mod:`.newton`.
 
 :class:`BiotProblem` is built in named steps (``_define_*``) and offers the protocol the Newton
 driver, the stepper, the exports and the finite-difference Jacobian tests work through:
@@ -21,17 +22,17 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 from dolfinx import fem, la
 from dolfinx import mesh as dmesh
-from dolfinx.cpp.la.petsc import create_index_sets
-from dolfinx.fem import petsc as fpetsc
 from mpi4py import MPI
 from petsc4py import PETSc
 
 from pilegroup.errors import ConvergenceError, SolverInputError
 from pilegroup.geometry import groups
 from pilegroup.geometry.meshdata import MeshData
+from pilegroup.solver.algebra import MonolithicAlgebra
 from pilegroup.solver.constraints import Constraints, RigidPlateControl
 from pilegroup.solver.forms import Coefficients, FormBuilder
 from pilegroup.solver.geostatic import SoilColumn
+from pilegroup.solver.initial_state import InitialState
 from pilegroup.solver.inputs import (
     Discretisation,
     DisplacementBC,
@@ -47,13 +48,13 @@ from pilegroup.solver.inputs import (
 from pilegroup.solver.interface import NodalInterface
 from pilegroup.solver.interface_gauss import GaussInterface
 from pilegroup.solver.layout import BlockLayout, Body
-from pilegroup.solver.linsolve import KSPSolver, get_preset
+from pilegroup.solver.linsolve import get_preset
 from pilegroup.solver.newton import NewtonSolver
 from pilegroup.solver.qpstate import QuadratureState
 from pilegroup.solver.step_protocol import StepInfo
 
 
-class BiotProblem:
+class BiotProblem(MonolithicAlgebra):
     """Coupled u–p problem with quadrature-point soil state and its own Newton solver.
 
     Args:
@@ -70,8 +71,11 @@ class BiotProblem:
         interface: give piles and cap their own displacement field, joined to the soil only by
             the zero-thickness interface (:class:`NodalInterface`, or :class:`GaussInterface`
             with ``quadrature="gauss"``); ``None`` ties them.
-        installation: excess pore pressure the piles' installation leaves around them at the
-            start (``None``: none).
+        installation: excess pore pressure the piles' installation leaves around them
+            (``None``: none), at the start or at :meth:`install_structure`.
+        install_later: the structure is installed by an ``install`` stage: until then it is
+            held still and the interface carries its initial traction only (the ground moves
+            past the piles' place); needs the interface.
     """
 
     def __init__(
@@ -87,6 +91,7 @@ class BiotProblem:
         self_weight: bool = True,
         interface: InterfaceCoupling | None = None,
         installation: InstallationExcess | None = None,
+        install_later: bool = False,
     ) -> None:
         self.md, self.mesh, self.comm = md, md.mesh, md.mesh.comm
         self.disc = disc = disc or Discretisation()
@@ -94,17 +99,25 @@ class BiotProblem:
         self.coupling = interface
         self.timings = {"assemble_F": 0.0, "assemble_J": 0.0, "solve": 0.0, "law": 0.0}
         self.layout = BlockLayout(md, materials, disc, separate=interface is not None)
+        if install_later and interface is None:
+            raise SolverInputError("install_later needs an interface (the piles tied to the"
+                                   " soil move with it from the start)")
+        self.install_later = install_later
         self.column = SoilColumn(md, materials, installation)
+        xq = self.layout.Q.tabulate_dof_coordinates()
         if self.column.has_excess:
-            self.column.set_excess_levels(self.layout.Q.tabulate_dof_coordinates()[:, 2],
-                                          self.comm)
-        self.column.check_installation(self.layout.Q.tabulate_dof_coordinates(), self.comm)
+            self.column.set_excess_levels(xq[:, 2], self.comm)
+        self.column.check_installation(xq, self.comm)
+        self.initial = InitialState(self.column, self.layout, installation, install_later)
         self.coef = Coefficients(self.layout, disc, self.column)
         self.interface = self._define_interface(interface)
         self._define_forms(loads, self_weight)
         self.constraints = Constraints(self.layout, displacement_bcs, pressure_bcs, plates,
                                        self.interface)
         self._define_algebra()
+        if install_later:
+            self.constraints.hold(self.layout, "structure")
+            self.interface.active = False  # type: ignore[union-attr]
         self.newton = NewtonSolver(self, self.options.newton)
         self.load_factor = 0.0
         self.undrained = False
@@ -154,22 +167,6 @@ class BiotProblem:
         self._Fint_forms = [compile_(fb.internal_force(b)) for b in self.bodies]
         self._P_forms = compile_(fb.fixed_stress()) \
             if get_preset(self.options.preset).fixed_stress else None
-
-    def _define_algebra(self) -> None:
-        """PETSc matrices, vectors and the linear solver (created once; sparsity reused)."""
-        self.A = fpetsc.create_matrix(self.J_forms)
-        self.P: PETSc.Mat | None = None
-        self._Mbeta = fpetsc.create_matrix(self._P_forms) if self._P_forms is not None else None
-        self.spaces = fem.extract_function_spaces(self.F_forms)
-        self.b, self.x, self.dx, self.tmp = (fpetsc.create_vector(self.spaces) for _ in range(4))
-        opts = self.options
-        self.linear_solver = KSPSolver(
-            self.comm, self.A, opts.prefix, opts.preset, opts.overrides,
-            lambda spec: self.layout.splits(
-                self.A, spec.splits,
-                spec.band_layers if opts.band_layers is None else opts.band_layers))
-        self._matrix_key: float | None = None  # dt of the assembled matrix (linear reuse)
-        self._itf_is: list[PETSc.IS] | None = None  # index sets for the interface's matrix
 
     # ------------------------------------------------------------------ what outputs read
     @property
@@ -247,28 +244,6 @@ class BiotProblem:
     def x_to_fields(self, vec: PETSc.Vec) -> None:
         """Put the block vector ``vec`` into the fields."""
         self.layout.x_to_fields(vec)
-
-    def dirichlet_response(self, bcs: list[fem.DirichletBC], out: PETSc.Vec) -> None:
-        """Solve the Newton system for the lifting of the conditions ``bcs`` into ``out``.
-
-        The right-hand side is ``-J g`` off the constrained dofs and ``g`` on them (``g`` the
-        conditions' values; the drainage conditions of an undrained step are left out), so
-        ``out`` is the increment that moves the constrained dofs by ``g`` (collective).
-        """
-        rhs = self.tmp
-        with rhs.localForm() as rl:
-            rl.set(0.0)
-        active = self.active(bcs)
-        fpetsc.apply_lifting(rhs, self.J_forms, bcs=fem.bcs_by_block(
-            fem.extract_function_spaces(self.J_forms, 1), active), alpha=1.0)
-        rhs.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-        fpetsc.set_bc(rhs, fem.bcs_by_block(self.spaces, active))
-        self.solve_linear(rhs, out)
-
-    @property
-    def refactorisations(self) -> int:
-        """LU factorisations of the run (direct presets; 0 for iterative ones)."""
-        return self.linear_solver.refactorisations
 
     def max_displacement(self) -> float:
         """Largest nodal displacement magnitude, m (all ranks)."""
@@ -368,90 +343,6 @@ class BiotProblem:
         gap = self.plate.gap(self, load_factor) if self.plate is not None else 0.0
         return rn, gap
 
-    def assemble_residual(self) -> None:
-        """Residual ``b`` with zero rows at constrained dofs (their values are imposed)."""
-        t0 = time.perf_counter()
-        b = self.b
-        with b.localForm() as bl:
-            bl.set(0.0)
-        fpetsc.assemble_vector(b, self.F_forms)
-        b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-        fpetsc.set_bc(b, fem.bcs_by_block(self.spaces, self.active(self.constraints.bcs_zero)))
-        b.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
-        self.timings["assemble_F"] += time.perf_counter() - t0
-
-    def _linear(self) -> bool:
-        """Linear problem: every law linear (interface laws declare ``linear = True``)."""
-        lin = all(b.qp.linear for b in self.bodies)
-        if self.interface is not None:
-            lin = lin and all(getattr(g.law, "linear", False) for g in self.interface.groups
-                              if g.law is not None)
-        return lin
-
-    def assemble_jacobian(self, force: bool = False) -> bool:
-        """Assemble ``A`` (and the preconditioning matrix); returns whether it did.
-
-        Skipped for linear problems with an unchanged dt unless ``force``.
-        """
-        key = float(self.coef.dt.value)
-        if not force and self._linear() and self._matrix_key == key:
-            return False
-        t0 = time.perf_counter()
-        bcs = self.active(self.constraints.bcs)
-        self.A.zeroEntries()
-        fpetsc.assemble_matrix(self.A, self.J_forms, bcs=bcs, diag=1.0)
-        self.A.assemble()
-        if self.interface is not None and self.interface.has_matrix:
-            self._add_interface_matrix(bcs)
-        if self._Mbeta is not None and self.linear_solver.uses_preconditioning_matrix:
-            self._assemble_fixed_stress(bcs)
-        self.linear_solver.set_operators(self.A, self.P)
-        self._matrix_key = key
-        if self.plate is not None:
-            self.plate.db = None
-        self.timings["assemble_J"] += time.perf_counter() - t0
-        return True
-
-    def _assemble_fixed_stress(self, bcs: list[fem.DirichletBC]) -> None:
-        """``P = J + M_beta`` (one axpy on J's sparsity)."""
-        self._Mbeta.zeroEntries()
-        fpetsc.assemble_matrix(self._Mbeta, self._P_forms, bcs=bcs, diag=0.0)
-        self._Mbeta.assemble()
-        if self.P is None:
-            self.P = self.A.duplicate(copy=True)
-        else:
-            self.A.copy(self.P, structure=PETSc.Mat.Structure.SAME_NONZERO_PATTERN)
-        self.P.axpy(1.0, self._Mbeta, structure=PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
-
-    def _add_interface_matrix(self, bcs: list[fem.DirichletBC]) -> None:
-        """Add the interface's own (non-form) tangent to ``A`` (Gauss-point quadrature)."""
-        if self._itf_is is None:
-            self._itf_is = create_index_sets(
-                [(V.dofmap.index_map, V.dofmap.index_map_bs) for V in self.spaces])
-        lay = self.layout
-        i_s, i_t = lay.block_of(lay.body("soil")), lay.block_of(lay.body("structure"))
-        by_block = fem.bcs_by_block(self.spaces, bcs)
-
-        def constrained(i: int) -> np.ndarray:
-            return np.concatenate([bc.dof_indices()[0] for bc in by_block[i]]
-                                  + [np.zeros(0, np.int32)])
-
-        self.interface.add_jacobian(self.A, self._itf_is[i_s], self._itf_is[i_t],
-                                    constrained(i_s), constrained(i_t))
-
-    def fall_back_linear_solver(self, reason: str) -> bool:
-        """After a step failed in the linear solver: use the preset's fallback, if it has one."""
-        if "KSP diverged" not in reason:
-            return False
-        return self.linear_solver.fall_back(reason)
-
-    def solve_linear(self, rhs: PETSc.Vec, sol: PETSc.Vec) -> int:
-        """Solve with the current Jacobian; returns the Krylov iterations."""
-        t0 = time.perf_counter()
-        its = self.linear_solver.solve(rhs, sol, self.undrained)
-        self.timings["solve"] += time.perf_counter() - t0
-        return its
-
     # ------------------------------------------------------------------ state management
     def _stateful(self) -> list[QuadratureState | NodalInterface | RigidPlateControl]:
         """Everything with a committed and a trial state besides the fields."""
@@ -481,44 +372,40 @@ class BiotProblem:
         if self.plate is not None:
             self.plate.value = self.plate.committed = 0.0
 
+    def install_structure(self, restored: bool) -> None:
+        """The structure, held still until now, joins the soil (an ``install`` stage).
+
+        Its displacements are released and the interface's laws start from the jump now, at
+        the traction they carried plus the installation's excess pore pressure, which the soil
+        gets at this instant with the total stress held, as at the start (docs/model.md,
+        "Order of events"). ``restored``: the run resumes from a checkpoint taken after the
+        installation, whose state already holds all this.
+        """
+        if not self.install_later or self.constraints.installed:
+            raise SolverInputError("install_structure: the structure is installed already (or"
+                                   " was not built with install_later)")
+        self.constraints.installed = True
+        self._matrix_key = None  # the held structure's conditions are gone: a new matrix
+        if restored:
+            self.interface.active = True  # type: ignore[union-attr]
+            self.column.installation = self.initial.installation
+            return
+        self.initial.install(self.bodies)
+        self.interface.activate(self.column.installation_excess)  # type: ignore[union-attr]
+
     # ------------------------------------------------------------------ initial stress
     def geostatic_stress(self) -> dict[str, np.ndarray]:
         """K0 effective stress at the quadrature points of each group (Mandel, kPa)."""
-        return self.column.stress([b.qp for b in self.bodies], self._installation_at_points())
-
-    def _installation_at_points(self) -> dict[str, np.ndarray] | None:
-        """The installation excess pore pressure at every soil group's quadrature points.
-
-        The interpolant in the pressure's element (nodal values of the closed form), so that the
-        effective stress it takes off balances the pressure field exactly.
-        """
-        if self.column.installation is None:
-            return None
-        out = {}
-        for b in self.bodies:
-            soil = [g for g in b.qp.groups if isinstance(g.material, SoilMaterial)]
-            if not soil:
-                continue
-            f = fem.Function(fem.functionspace(b.mesh, self.layout.Q.ufl_element()))
-            f.interpolate(lambda x: self.column.installation_excess(x.T))
-            expr = fem.Expression(f, b.qp.points)
-            for g in soil:
-                out[g.name] = expr.eval(b.mesh, g.cells).reshape(-1) if g.n else np.zeros(0)
-        return out
+        return self.initial.effective_stress(self.bodies)
 
     @property
     def has_initial_excess(self) -> bool:
         """Whether the soil starts with an excess pore pressure (layers, installation)."""
-        return self.column.has_excess or self.column.installation is not None
+        return self.initial.has_excess
 
     def set_initial_pressure(self) -> None:
         """The excess pore pressure at the start: the layers' ``u0`` plus the installation's."""
-        lay = self.layout
-        x = lay.Q.tabulate_dof_coordinates()
-        for f in (lay.p, lay.p_n):
-            f.x.array[:] = self.column.excess(x[:, 2])
-            if self.column.installation is not None:
-                f.x.array[:] += self.column.installation_excess(x)
+        self.initial.set_pressure()
 
     def set_initial_stress(self, stress0: Mapping[str, np.ndarray | None]) -> None:
         """Initialise every group's law state with ``stress0[name]`` ((n,6) Mandel kPa)."""

@@ -93,6 +93,19 @@ class QuadratureState:
             self._write(g, g.state_n["stress"], None)
         self.stress.x.scatter_forward()
 
+    def add_isotropic_stress(self, values: Mapping[str, np.ndarray]) -> None:
+        """Add ``values[name]`` ((n,) kPa) to the normal stresses of group ``name``.
+
+        The committed state changes; groups not named are left alone.
+        """
+        for g in self.groups:
+            if g.name not in values or g.n == 0:
+                continue
+            g.state_n["stress"] = g.state_n["stress"].copy()
+            g.state_n["stress"][:, :3] += np.asarray(values[g.name])[:, None]
+            self._write(g, g.state_n["stress"], None)
+        self.stress.x.scatter_forward()
+
     def evaluate(self, dt: float) -> None:
         """Evaluate the laws at the current strain increment; fill stress and tangent."""
         for g in self.groups:

@@ -155,7 +155,7 @@ class StepProblem(Protocol):
 
     @property
     def has_initial_excess(self) -> bool:
-        """Whether a soil group starts with an excess pore pressure (consolidating layers)."""
+        """Whether the soil starts with an excess pore pressure (layers, installation)."""
         ...
 
     def set_initial_pressure(self) -> None:
@@ -168,6 +168,13 @@ class StepProblem(Protocol):
 
     def set_initial_stress(self, stress0: Mapping[str, np.ndarray | None]) -> None:
         """Initialise every group's law state with ``stress0``."""
+        ...
+
+    def install_structure(self, restored: bool) -> None:
+        """The structure, held still until now, joins the soil (an ``install`` stage).
+
+        ``restored``: the state is a checkpoint's, taken after the installation.
+        """
         ...
 
     def max_displacement(self) -> float:

@@ -21,6 +21,12 @@ Stages (docs/model.md):
 * ``ground``: the amplitudes of the ground actions (surcharges, water table) ramped linearly to
   the stage's values, the load factor held; ``duration = 0`` is instantaneous.
 * ``consolidation``: every action held to the stage end.
+* ``install``: the structure (piles and cap), held still and free of the soil's shear since
+  the start, joins the soil at this instant (``problem.install_structure``); the ground may
+  have moved before. No step is solved: the state is in equilibrium as it is.
+
+The analysis starts at ``t_start`` (day, e.g. negative when the ground moves before the piles
+are installed at day 0).
 
 A run can be resumed: :class:`RunState` is where the stage loop is (stage, t, load factor) and
 what the stepper remembers (``dt``, ``easy``, the run log); :func:`run_stages` starts from a
@@ -207,6 +213,7 @@ def run_stages(
     exports: Sequence[Export] = (),
     state: RunState | None = None,
     boundary: Boundary | None = None,
+    t_start: float = 0.0,
 ) -> RunLog:
     """Run the stages in order; returns the :class:`RunLog`.
 
@@ -223,6 +230,7 @@ def run_stages(
             fresh run by default. It is kept up to date during the run.
         boundary: called at every step boundary with the current ``state`` (it may save a
             checkpoint, or raise to stop the run there).
+        t_start: the time (day) of the geostatic state, where the first stage starts.
     """
 
     def milestone(pb: StepProblem, t: float, stage: str) -> None:
@@ -231,10 +239,10 @@ def run_stages(
         if on_milestone is not None:
             on_milestone(pb, t, stage)
 
-    run_state = state or RunState()
+    run_state = state or RunState(t=t_start)
     try:
         return _Run(problem, stages, ts, run_state, boundary).run(
-            milestone, geostatic_tol, on_step)
+            milestone, geostatic_tol, on_step, t_start)
     except StepFailure as exc:
         exc.run_log = run_state.log  # what was done up to the failure (the failed run's summary)
         raise
@@ -265,23 +273,29 @@ class _Run:
         if self.boundary is not None:
             self.boundary(self.problem, s, output)
 
-    def run(self, on_milestone: Callback, geostatic_tol: float, on_step: Callback | None
-            ) -> RunLog:
+    def run(self, on_milestone: Callback, geostatic_tol: float, on_step: Callback | None,
+            t_start: float = 0.0) -> RunLog:
         """Every stage not yet complete, in order."""
         s, log = self.state, self.state.log
         t_wall = time.perf_counter() - log.wall_s
-        t = lam = 0.0  # the start of each stage, the same arithmetic in a resumed run
+        t, lam = t_start, 0.0  # the start of each stage, the same arithmetic in a resumed run
         g = (0.0,) * self.n_ground
         for i, st in enumerate(self.stages):
             t1 = t + st.duration
             lam1 = st.load_factor if st.kind == "load" else lam
             g1 = tuple(st.ground) + g[len(st.ground):] if st.kind == "ground" else g
             if i < s.stage or (i == s.stage and s.done):
+                if st.kind == "install":  # a resumed run's structure is in place again
+                    self.problem.install_structure(restored=True)
                 t, lam, g = t1, lam1, g1
                 continue
             resume = i == s.stage and s.started
             s.stage, s.started, s.done = i, True, False
-            if st.kind == "geostatic":
+            if st.kind == "install":
+                self.problem.install_structure(restored=False)
+                on_milestone(self.problem, t, st.name)
+                self.at_boundary(t, lam, True, done=True)
+            elif st.kind == "geostatic":
                 self._set_ground(g)
                 self._geostatic(i, st, t, lam, geostatic_tol, on_milestone)
             elif st.kind in ("load", "ground") and st.duration == 0.0:

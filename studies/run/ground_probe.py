@@ -11,7 +11,10 @@
   soil beside it (the pile's minus the interface's relative displacement), and, with ``pile =
   0``, the free field: the soil's settlement along the vertical farthest from the piles in the
   modelled block (a corner; the block's sides are on rollers, so it settles as a wide site);
-  and the excess pore pressure in the soil at the shaft (free field: on that vertical);
+  and the excess pore pressure in the soil at the shaft (free field: on that vertical). Piles
+  installed after the start (an ``installation`` stage) settle from then on, and so does the
+  soil beside them (the interface's jump counts from then) and, from then on, the free field:
+  the settlements of the unified method's diagram since the installation;
 * ``surface_trough.csv``: the ground surface's settlement along the line through the group's
   centre parallel to x, across the whole block (points inside a pile left out).
 
@@ -80,6 +83,10 @@ class GroundProbe:
         self._trough = PointSampler(soil.u, np.column_stack(
             [xs, np.full(N_TROUGH, y0), np.zeros(N_TROUGH)]))
         self.rows: dict[str, list[str]] = {"plane": [], "profiles": [], "trough": []}
+        #: the piles' installation stage (a scenario that installs them after the start): from
+        #: it on the free field's settlement counts from its value then, as the piles' does
+        self._install = next((st.name for st in sc.stages if st.kind == "installation"), None)
+        self._free_origin: np.ndarray | None = None
         self._p = pb.layout.p
         self._free_p = PointSampler(self._p, self._free.pts)
         self._shaft_p: dict[int, PointSampler] = {}
@@ -123,6 +130,10 @@ class GroundProbe:
                                       for a, b, c, d, e in zip(depth, N, s_pile, s_soil, u,
                                                                strict=True)]
         free, free_p = -self._free()[:, 2], self._free_p()
+        if stage == self._install:
+            self._free_origin = free.copy()
+        if self._free_origin is not None:
+            free = free - self._free_origin
         self.rows["profiles"] += [f"{t:.6g},0,{a:.6g},,,{b:.9g},{_num(c)}"
                                   for a, b, c in zip(self.free_depth, free, free_p, strict=True)
                                   if np.isfinite(b)]
@@ -146,11 +157,14 @@ class GroundProbe:
 
     def saved_state(self) -> dict[str, Any]:
         """What a checkpoint keeps: every table's rows."""
-        return {"rows": {k: list(v) for k, v in self.rows.items()}}
+        return {"rows": {k: list(v) for k, v in self.rows.items()},
+                "free_origin": None if self._free_origin is None else self._free_origin.tolist()}
 
     def restore_state(self, data: dict[str, Any]) -> None:
         """Continue from :meth:`saved_state`."""
         self.rows = {k: list(v) for k, v in data["rows"].items()}
+        origin = data.get("free_origin")
+        self._free_origin = None if origin is None else np.array(origin, dtype=float)
 
     def summary(self) -> list[dict[str, float]]:
         """The last output time's neutral plane of every pile (for ``summary.json``)."""

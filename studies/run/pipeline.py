@@ -151,7 +151,8 @@ def build_problem(sc: Scenario, geo: ResolvedGeometry, md: MeshData, preset: str
                          band_layers=band_layers(h))
     return BiotProblem(md, materials, disc, displacement_bcs=dbcs,
                        pressure_bcs=drainage(sc), loads=loads, options=opts,
-                       interface=interface_coupling(sc, h), installation=installation(sc))
+                       interface=interface_coupling(sc, h), installation=installation(sc),
+                       install_later=any(st.kind == "installation" for st in sc.stages))
 
 
 def installation(sc: Scenario) -> InstallationExcess | None:
@@ -276,6 +277,8 @@ def solver_stages(sc: Scenario) -> list[SolverStage]:
     for st, t0, t1 in sc.stage_times():
         if st.kind == "geostatic":
             out.append(SolverStage(st.name, "geostatic"))
+        elif st.kind == "installation":
+            out.append(SolverStage(st.name, "install"))
         elif st.kind == "load":
             lf = st.cap_load_kN / total if total > 0 else 0.0  # type: ignore[operator]
             out.append(SolverStage(st.name, "load", duration=t1 - t0, load_factor=lf))
@@ -295,7 +298,8 @@ def time_stepping(sc: Scenario) -> StepControl:
     t = sc.numerics.time
     return StepControl(dt0=t.dt_initial_day, dt_min=t.dt_min_day, dt_max=t.dt_max_day,
                         grow=t.grow_factor, cut=t.cut_factor, easy_newton=t.easy_newton,
-                        milestones=tuple(x for x in sc.time.output_days if x > 0))
+                        milestones=tuple(x for x in sc.time.output_days
+                                         if x > sc.time.start_day))
 
 
 def xdmf_label(symmetry: str) -> str | None:
@@ -363,7 +367,7 @@ def run_coupled(sc: Scenario, geo: ResolvedGeometry, md: MeshData, out: Path,
     ckpt = Checkpoints(out, sc, pb, [st.name for st in stages], exports)
     state = ckpt.restore(resume) if resume is not None else None
     quiet = os.environ.get("PILEGROUP_PROGRESS") == "0"  # e.g. the runs of a batch
-    bar = tqdm(total=sc.time.end_day, unit="day", desc=sc.name,
+    bar = tqdm(total=sc.time.end_day, initial=sc.time.start_day, unit="day", desc=sc.name,
                disable=pb.comm.rank != 0 or quiet,
                bar_format="{desc}: {n:.3g}/{total:g} day |{bar}| {elapsed}{postfix}")
 
@@ -376,7 +380,7 @@ def run_coupled(sc: Scenario, geo: ResolvedGeometry, md: MeshData, out: Path,
     try:
         run_log = run_stages(pb, stages, time_stepping(sc), on_step=on_step,
                              geostatic_tol=GEOSTATIC_TOL_M, exports=exports, state=state,
-                             boundary=ckpt)
+                             boundary=ckpt, t_start=sc.time.start_day)
     except StepFailure as exc:
         load = exc.load_factor * sc.total_cap_load()
         msg = (f"no equilibrium beyond load factor {exc.load_factor:.4g} ({load:.6g} kN) at "

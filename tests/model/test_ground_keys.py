@@ -87,3 +87,45 @@ def test_symmetry_follows_the_surcharge_area():
     data["numerics"]["symmetry"] = "quarter"
     with pytest.raises(ScenarioError, match="cuts at x = 0, but the load is not mirror"):
         resolve_geometry(scenario_from_dict(data))
+
+
+INSTALL = {"name": "piles", "kind": "installation"}
+
+
+def _later(**time):
+    """Pier 667 with a fill from day -100 and the piles installed at day 0, then its load."""
+    data = copy.deepcopy(BASE)
+    data["stages"] = [data["stages"][0], dict(FILL), {"name": "settling",
+                                                      "kind": "consolidation", "until_day": 0.0},
+                      INSTALL, *data["stages"][1:]]
+    data["time"].update({"start_day": -100.0, **time})
+    return data
+
+
+def test_piles_installed_into_moving_ground_map_onto_solver_stages():
+    sc = scenario_from_dict(_later())
+    times = {st.name: (a, b) for st, a, b in sc.stage_times()}
+    assert times["geostatic"] == (-100.0, -100.0) and times["fill"] == (-100.0, -90.0)
+    assert times["settling"] == (-90.0, 0.0) and times["piles"] == (0.0, 0.0)
+    kinds = [s.kind for s in solver_stages(sc)]
+    assert kinds[:4] == ["geostatic", "ground", "consolidation", "install"]
+    assert [s.duration for s in solver_stages(sc)][:4] == [0.0, 10.0, 90.0, 0.0]
+
+
+@pytest.mark.parametrize(("change", "key", "words"), [
+    (lambda d: d["time"].update(start_day=5.0), "time.start_day", "[-100000, 0]"),
+    (lambda d: d["time"].update(output_days=[-200.0, 0.0]), "output_days[0]",
+     "start_day = -100"),
+    (lambda d: d["stages"].insert(1, {"name": "early", "kind": "load", "cap_load_kN": 1.0,
+                                      "duration_day": 1.0}),
+     "stages[1].kind", "before the piles exist"),
+    (lambda d: d["stages"].append(dict(INSTALL, name="again")), "kind",
+     "installed once"),
+    (lambda d: d["interface"].update(mode="tied"), "interface.mode", "installation stage"),
+])
+def test_bad_order_of_events_names_key_value_and_rule(change, key, words):
+    data = _later()
+    change(data)
+    with pytest.raises(ScenarioError) as err:
+        scenario_from_dict(data)
+    assert key in err.value.key and words in str(err.value)

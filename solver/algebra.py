@@ -1,0 +1,151 @@
+"""The monolithic system's algebra: PETSc matrices and vectors, assembly and linear solves.
+
+:class:`MonolithicAlgebra` is the part of :class:`~pilegroup.solver.problem.BiotProblem` that
+turns the compiled forms into the Newton system: the Jacobian (with the fixed-stress
+preconditioning matrix and the Gauss interface's own tangent), the residual with its
+constrained rows, the lifting of prescribed values, and the linear solver with its fallback.
+It works on what the problem defines: ``F_forms``, ``J_forms``, ``_P_forms``, ``layout``,
+``interface``, ``coef``, ``options``, ``constraints``, ``plate``, ``bodies``, ``comm``,
+``undrained``, ``timings`` and ``active``.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+from dolfinx import fem
+from dolfinx.cpp.la.petsc import create_index_sets
+from dolfinx.fem import petsc as fpetsc
+from petsc4py import PETSc
+
+from pilegroup.solver.linsolve import KSPSolver
+
+
+class MonolithicAlgebra:
+    """Matrices, vectors, assembly and the linear solver of the coupled problem (a mixin)."""
+
+    def _define_algebra(self) -> None:
+        """PETSc matrices, vectors and the linear solver (created once; sparsity reused)."""
+        self.A = fpetsc.create_matrix(self.J_forms)
+        self.P: PETSc.Mat | None = None
+        self._Mbeta = fpetsc.create_matrix(self._P_forms) if self._P_forms is not None else None
+        self.spaces = fem.extract_function_spaces(self.F_forms)
+        self.b, self.x, self.dx, self.tmp = (fpetsc.create_vector(self.spaces) for _ in range(4))
+        opts = self.options
+        self.linear_solver = KSPSolver(
+            self.comm, self.A, opts.prefix, opts.preset, opts.overrides,
+            lambda spec: self.layout.splits(
+                self.A, spec.splits,
+                spec.band_layers if opts.band_layers is None else opts.band_layers))
+        self._matrix_key: float | None = None  # dt of the assembled matrix (linear reuse)
+        self._itf_is: list[PETSc.IS] | None = None  # index sets for the interface's matrix
+
+    def dirichlet_response(self, bcs: list[fem.DirichletBC], out: PETSc.Vec) -> None:
+        """Solve the Newton system for the lifting of the conditions ``bcs`` into ``out``.
+
+        The right-hand side is ``-J g`` off the constrained dofs and ``g`` on them (``g`` the
+        conditions' values; the drainage conditions of an undrained step are left out), so
+        ``out`` is the increment that moves the constrained dofs by ``g`` (collective).
+        """
+        rhs = self.tmp
+        with rhs.localForm() as rl:
+            rl.set(0.0)
+        active = self.active(bcs)
+        fpetsc.apply_lifting(rhs, self.J_forms, bcs=fem.bcs_by_block(
+            fem.extract_function_spaces(self.J_forms, 1), active), alpha=1.0)
+        rhs.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        fpetsc.set_bc(rhs, fem.bcs_by_block(self.spaces, active))
+        self.solve_linear(rhs, out)
+
+    @property
+    def refactorisations(self) -> int:
+        """LU factorisations of the run (direct presets; 0 for iterative ones)."""
+        return self.linear_solver.refactorisations
+
+    def assemble_residual(self) -> None:
+        """Residual ``b`` with zero rows at constrained dofs (their values are imposed)."""
+        t0 = time.perf_counter()
+        b = self.b
+        with b.localForm() as bl:
+            bl.set(0.0)
+        fpetsc.assemble_vector(b, self.F_forms)
+        b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        fpetsc.set_bc(b, fem.bcs_by_block(self.spaces, self.active(self.constraints.bcs_zero)))
+        b.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+        self.timings["assemble_F"] += time.perf_counter() - t0
+
+    def _linear(self) -> bool:
+        """Linear problem: every law linear (interface laws declare ``linear = True``)."""
+        lin = all(b.qp.linear for b in self.bodies)
+        if self.interface is not None:
+            lin = lin and all(getattr(g.law, "linear", False) for g in self.interface.groups
+                              if g.law is not None)
+        return lin
+
+    def assemble_jacobian(self, force: bool = False) -> bool:
+        """Assemble ``A`` (and the preconditioning matrix); returns whether it did.
+
+        Skipped for linear problems with an unchanged dt unless ``force``.
+        """
+        key = float(self.coef.dt.value)
+        if not force and self._linear() and self._matrix_key == key:
+            return False
+        t0 = time.perf_counter()
+        bcs = self.active(self.constraints.bcs)
+        self.A.zeroEntries()
+        fpetsc.assemble_matrix(self.A, self.J_forms, bcs=bcs, diag=1.0)
+        self.A.assemble()
+        if self.interface is not None and self.interface.has_matrix:
+            self._add_interface_matrix(bcs)
+        if self._Mbeta is not None and self.linear_solver.uses_preconditioning_matrix:
+            self._assemble_fixed_stress(bcs)
+        self.linear_solver.set_operators(self.A, self.P)
+        self._matrix_key = key
+        if self.plate is not None:
+            self.plate.db = None
+        self.timings["assemble_J"] += time.perf_counter() - t0
+        return True
+
+    def _assemble_fixed_stress(self, bcs: list[fem.DirichletBC]) -> None:
+        """``P = J + M_beta`` (one axpy on J's sparsity)."""
+        self._Mbeta.zeroEntries()
+        fpetsc.assemble_matrix(self._Mbeta, self._P_forms, bcs=bcs, diag=0.0)
+        self._Mbeta.assemble()
+        if self.P is None:
+            self.P = self.A.duplicate(copy=True)
+        else:
+            self.A.copy(self.P, structure=PETSc.Mat.Structure.SAME_NONZERO_PATTERN)
+        self.P.axpy(1.0, self._Mbeta, structure=PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
+
+    def _add_interface_matrix(self, bcs: list[fem.DirichletBC]) -> None:
+        """Add the interface's own (non-form) tangent to ``A`` (Gauss-point quadrature)."""
+        if self._itf_is is None:
+            self._itf_is = create_index_sets(
+                [(V.dofmap.index_map, V.dofmap.index_map_bs) for V in self.spaces])
+        lay = self.layout
+        i_s, i_t = lay.block_of(lay.body("soil")), lay.block_of(lay.body("structure"))
+        by_block = fem.bcs_by_block(self.spaces, bcs)
+
+        def constrained(i: int) -> np.ndarray:
+            return np.concatenate([bc.dof_indices()[0] for bc in by_block[i]]
+                                  + [np.zeros(0, np.int32)])
+
+        self.interface.add_jacobian(self.A, self._itf_is[i_s], self._itf_is[i_t],
+                                    constrained(i_s), constrained(i_t))
+
+    def fall_back_linear_solver(self, reason: str) -> bool:
+        """After a step failed in the linear solver: use the preset's fallback, if it has one."""
+        if "KSP diverged" not in reason:
+            return False
+        return self.linear_solver.fall_back(reason)
+
+    def solve_linear(self, rhs: PETSc.Vec, sol: PETSc.Vec) -> int:
+        """Solve with the current Jacobian; returns the Krylov iterations."""
+        t0 = time.perf_counter()
+        its = self.linear_solver.solve(rhs, sol, self.undrained)
+        self.timings["solve"] += time.perf_counter() - t0
+        return its
+
+
+__all__ = ["MonolithicAlgebra"]
