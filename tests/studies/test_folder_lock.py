@@ -103,9 +103,14 @@ def test_two_runs_into_one_folder(small_pile, tmp_path):
             time.sleep(0.02)
         who = _who(folder)
         assert who["pid"] == first.pid and "pilegroup run" in who["command"]
-        second = subprocess.run(cmd, capture_output=True, text=True, timeout=TIMEOUT,
-                                env=_env(tmp_path))
-        assert first.poll() is None, "the first run ended before the second tried"
+        # paused while the second one tries (a small run may otherwise end first on a busy
+        # machine): it still holds its folder
+        first.send_signal(signal.SIGSTOP)
+        try:
+            second = subprocess.run(cmd, capture_output=True, text=True, timeout=TIMEOUT,
+                                    env=_env(tmp_path))
+        finally:
+            first.send_signal(signal.SIGCONT)
         assert second.returncode == 2
         assert _pilegroup_lines(second.stderr) == [_busy_line(folder, who)]
         assert first.wait(timeout=TIMEOUT) == 0
