@@ -293,6 +293,22 @@ def solver_stages(sc: Scenario) -> list[SolverStage]:
     return out
 
 
+def check_runaway(sc: Scenario, settlement_m: float, t: float, load_factor: float,
+                  stage: str) -> None:
+    """Raise :class:`StepFailure` once the foundation settles more than a pile diameter.
+
+    The small-strain model can keep "carrying" a load far beyond the foundation's capacity by
+    settling without bound; a settlement beyond the pile diameter (ten times the usual failure
+    criterion of 10 % of it) is taken as the foundation having failed, and the run ends there
+    (exit 1, ``summary.json`` status ``failed``) instead of completing.
+    """
+    d = sc.piles.diameter_m
+    if settlement_m > d:
+        raise StepFailure(f"stage {stage!r}: the settlement {settlement_m:.4g} m exceeds the pile"
+                          f" diameter {d:g} m (runaway: the foundation does not carry the load)",
+                          t, load_factor, stage)
+
+
 def time_stepping(sc: Scenario) -> StepControl:
     """The solver's adaptive stepping rules from ``numerics.time`` and ``time.output_days``."""
     t = sc.numerics.time
@@ -374,8 +390,10 @@ def run_coupled(sc: Scenario, geo: ResolvedGeometry, md: MeshData, out: Path,
     def on_step(problem: BiotProblem, t: float, stage: str) -> None:
         piles.record_step(t)
         curve.record(t, stage)
+        w = settlement.probe()
         bar.n = t
-        bar.set_postfix_str(f"{stage}, settlement {1000 * settlement.probe():.2f} mm")
+        bar.set_postfix_str(f"{stage}, settlement {1000 * w:.2f} mm")
+        check_runaway(sc, w, t, problem.load_factor, stage)
 
     try:
         run_log = run_stages(pb, stages, time_stepping(sc), on_step=on_step,

@@ -122,3 +122,19 @@ def test_bench_failure_on_rank_0_ends_the_job(tmp_path):
     assert len(lines) == 1 and lines[0].startswith(
         "pilegroup: rank 0 of 2 failed: NotADirectoryError"), r.stderr[-2000:]
     assert wall < 60
+
+
+def test_load_beyond_capacity_ends_the_run_failed(tmp_path, small_pile, monkeypatch):
+    """200 MN on the small pile: the run ends with exit 1, a failed summary and one line
+    naming the stage, time, load factor and settlement, not ``complete`` metres down."""
+    monkeypatch.setenv("PILEGROUP_MESH_CACHE", str(tmp_path / "cache"))
+    out = tmp_path / "run"
+    r = subprocess.run([str(BIN / "pilegroup"), "run", small_pile, "--out", str(out),
+                        "--set", "stages[1].cap_load_kN=200000", "--set", "outputs.plots=false"],
+                       capture_output=True, text=True, timeout=300)
+    assert r.returncode == 1, r.stderr[-3000:]
+    lines = [ln for ln in r.stderr.splitlines() if ln.startswith("pilegroup:")]
+    assert len(lines) == 1 and "exceeds the pile diameter 0.8 m" in lines[0], lines
+    assert "stage 'loading'" in lines[0] and "load factor" in lines[0] and " day" in lines[0]
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "failed"
