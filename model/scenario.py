@@ -287,6 +287,11 @@ class Scenario:
                 t = end
         return tuple(out)
 
+    @property
+    def installation_stage(self) -> Stage | None:
+        """The stage that installs the piles after the start, or None (wished in place)."""
+        return next((st for st in self.stages if st.kind == "installation"), None)
+
     def total_cap_load(self) -> float:
         """Cap load (kN) at the end of the last load stage."""
         loads = [st.cap_load_kN for st in self.stages if st.kind == "load"]

@@ -70,15 +70,16 @@ class InitialState:
             if self.column.installation is not None:
                 f.x.array[:] += self.column.installation_excess(x)
 
-    def install(self, bodies: Sequence[Body]) -> None:
+    def install(self, bodies: Sequence[Body], restored: bool) -> None:
         """Add the installation's excess pore pressure now, the total stress held.
 
         The soil's effective stress loses it in every direction and the pressure field gains
         it (committed and current); the interface's share is the caller's
-        (``column.installation_excess``).
+        (``column.installation_excess``). ``restored``: the state is a checkpoint's, taken
+        after the installation, which holds it already.
         """
         self.column.installation = self.installation
-        if self.installation is None:
+        if self.installation is None or restored:
             return
         at_points = self._at_points(bodies) or {}
         for b in bodies:

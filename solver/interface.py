@@ -131,7 +131,6 @@ class NodalInterface:
         self.dS = ufl.Measure("dS", domain=md.mesh, subdomain_data=ents,
                               metadata={"quadrature_rule": "GLL",
                                         "quadrature_degree": 2 * degree - 1})
-        self._entities = (md.mesh, ents)
         self.entity_maps = [split.structure_map, split.soil_map]
         soil = split.soil
         # Nodal weights per group: W[i, m] = int_{group m} phi_i dS, one assembly for all groups.

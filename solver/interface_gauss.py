@@ -69,8 +69,7 @@ class GaussInterface(NodalInterface):
         The excess pore pressure beside the law (``solver/forms.py::interface``) is integrated
         as the law's traction is, so that a pressure the initial traction holds cancels exactly.
         """
-        mesh, ents = self._entities
-        dS = ufl.Measure("dS", domain=mesh, subdomain_data=ents, metadata={"quadrature_degree": 3})
+        dS = self.dS.reconstruct(metadata={"quadrature_degree": 3})
         return dS(SHAFT) + dS(BASE)
 
     def _build_groups(self, md: MeshData, ents: list, traction0: Callable,

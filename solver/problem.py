@@ -386,12 +386,11 @@ class BiotProblem(MonolithicAlgebra):
                                    " was not built with install_later)")
         self.constraints.installed = True
         self._matrix_key = None  # the held structure's conditions are gone: a new matrix
+        self.initial.install(self.bodies, restored)
         if restored:
             self.interface.active = True  # type: ignore[union-attr]
-            self.column.installation = self.initial.installation
-            return
-        self.initial.install(self.bodies)
-        self.interface.activate(self.column.installation_excess)  # type: ignore[union-attr]
+        else:
+            self.interface.activate(self.column.installation_excess)  # type: ignore[union-attr]
 
     # ------------------------------------------------------------------ initial stress
     def geostatic_stress(self) -> dict[str, np.ndarray]:

@@ -85,7 +85,7 @@ class GroundProbe:
         self.rows: dict[str, list[str]] = {"plane": [], "profiles": [], "trough": []}
         #: the piles' installation stage (a scenario that installs them after the start): from
         #: it on the free field's settlement counts from its value then, as the piles' does
-        self._install = next((st.name for st in sc.stages if st.kind == "installation"), None)
+        self._install = None if sc.installation_stage is None else sc.installation_stage.name
         self._free_origin: np.ndarray | None = None
         self._p = pb.layout.p
         self._free_p = PointSampler(self._p, self._free.pts)

@@ -152,7 +152,7 @@ def build_problem(sc: Scenario, geo: ResolvedGeometry, md: MeshData, preset: str
     return BiotProblem(md, materials, disc, displacement_bcs=dbcs,
                        pressure_bcs=drainage(sc), loads=loads, options=opts,
                        interface=interface_coupling(sc, h), installation=installation(sc),
-                       install_later=any(st.kind == "installation" for st in sc.stages))
+                       install_later=sc.installation_stage is not None)
 
 
 def installation(sc: Scenario) -> InstallationExcess | None:

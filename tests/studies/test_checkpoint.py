@@ -107,18 +107,6 @@ def _pilegroup_lines(stderr):
 
 
 @pytest.fixture(scope="module")
-def cache(tmp_path_factory):
-    return tmp_path_factory.mktemp("mesh_cache")
-
-
-@pytest.fixture(scope="module")
-def scenario(tmp_path_factory, small_pile_source):
-    f = tmp_path_factory.mktemp("scenario") / "small_pile.toml"
-    f.write_text(small_pile_source)
-    return f
-
-
-@pytest.fixture(scope="module")
 def reference(tmp_path_factory, scenario, cache):
     """The uninterrupted serial run."""
     out = tmp_path_factory.mktemp("reference") / "run"

@@ -37,18 +37,6 @@ def _pilegroup_lines(stderr):
     return [ln for ln in stderr.splitlines() if ln.startswith("pilegroup:")]
 
 
-@pytest.fixture(scope="module")
-def cache(tmp_path_factory):
-    return tmp_path_factory.mktemp("mesh_cache")
-
-
-@pytest.fixture(scope="module")
-def scenario(tmp_path_factory, small_pile_source):
-    f = tmp_path_factory.mktemp("scenario") / "small_pile.toml"
-    f.write_text(small_pile_source)
-    return f
-
-
 def _finished(tmp_path_factory, scenario, cache, ranks):
     out = tmp_path_factory.mktemp(f"ranks{ranks}") / "run"
     r = _run(scenario, out, cache, ranks=ranks)
