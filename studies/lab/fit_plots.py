@@ -42,7 +42,7 @@ def curve_fit_figure(cf: CurveFit) -> Figure:
     ax.legend(fontsize="x-small")
     axr.axhline(0.0, color="0.4", lw=0.8)
     axr.set_xlabel(ax.get_xlabel())
-    axr.set_ylabel("residual, m" if creep else "residual, relative")
+    axr.set_ylabel("residual, model / measured - 1")
     for a in (ax, axr):
         a.grid(alpha=0.3)
     return fig

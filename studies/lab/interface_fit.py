@@ -18,6 +18,7 @@
   grows at the constant rate ``PileSoilInterface.creep_rate`` (docs/model.md), so each curve is
   ``w(t) = w0 + rate t`` with its own ``w0`` (the instantaneous slip; fitted, not reported).
   The rate needs the yield surface: the soil's ``c_kPa``, ``phi_deg`` and the Eq. 15 reading.
+  The residuals are relative too (``model / measured - 1`` of every slip).
 
 Rows of one curve follow each other in the file; a curve is the rows of one ``curve`` number
 (when the column is there) and one normal stress, and a new one starts where the time (creep)
@@ -184,6 +185,9 @@ def fit_creep(path: Path, material: LabMaterial, variant: str | None = None,
     if points < np_ + len(curves) or min(c.slip.size for c in curves) < 2:
         raise _too_few(path, points, names, f" and one instantaneous slip per curve, "
                        f"{len(curves)} curves; two points per curve at least")
+    if any(np.any(c.slip <= 0) for c in curves):
+        raise ScenarioError(f"{path} column 'slip_m'", "<= 0", "must be > 0 under a held "
+                            "shear (one direction of shear)")
     tr = np.array([[-c.normal_kPa, float(np.mean(c.shear)), 0.0] for c in curves])
     t0 = [c.time - c.time[0] for c in curves]
 
@@ -197,7 +201,7 @@ def fit_creep(path: Path, material: LabMaterial, variant: str | None = None,
 
     def residual(x: np.ndarray) -> np.ndarray:
         r = rates(x)
-        return np.concatenate([x[np_ + i] + r[i] * t0[i] - c.slip
+        return np.concatenate([(x[np_ + i] + r[i] * t0[i]) / c.slip - 1.0
                                for i, c in enumerate(curves)])
 
     slopes = np.array([np.polyfit(t, c.slip, 1)[0] for t, c in zip(t0, curves, strict=True)])
@@ -218,7 +222,7 @@ def fit_creep(path: Path, material: LabMaterial, variant: str | None = None,
                ("phi_deg", law.phi_deg), ("N", law.N) if not fit_N else ("fit_N", True),
                ("parameters from", material.source))
     result = FitResult("interface-creep", str(path), names, tuple(map(float, values)), se, corr,
-                       rms(res.fun), "m", res.fun.size, int(res.nfev), details)
+                       rms(res.fun), "(relative)", res.fun.size, int(res.nfev), details)
     r = rates(res.x)
     return CurveFit(curves, lambda i, t: res.x[np_ + i] + r[i] * (t - curves[i].time[0]),
                     res.fun, result)

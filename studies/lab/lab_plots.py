@@ -89,9 +89,10 @@ def _time_figure(t: Table, test: str, title: str) -> Figure:
                             color=_colour(k, len(curves)), label=_label(test, t, m))
         ax.set_xlabel("time (days)")
         ax.set_ylabel("slip (mm)" if test == "interface-creep" else "shear stress (kPa)")
-        ax.set_title(f"{title}: {v} reading")
+        ax.set_title(f"{v} reading")
         ax.legend(fontsize="x-small")
         ax.grid(alpha=0.3)
+    fig.suptitle(title)
     return fig
 
 
