@@ -22,7 +22,7 @@ level or rate, per Eq. 15 reading).
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -165,10 +165,13 @@ def _hold_shear(law: PileSoilInterface, st: dict[str, np.ndarray], tau: float, d
                             "(Newton on the slip did not converge in 50 iterations)")
 
 
-def creep_test(laws: Mapping[str, PileSoilInterface], protocol: InterfaceProtocol) -> Table:
-    """Each held shear applied at once, then held for ``days`` in ``steps`` equal steps."""
-    rows = _Rows()
-    dt = protocol.days / protocol.steps
+def _loaded(laws: Mapping[str, PileSoilInterface], protocol: InterfaceProtocol, rows: _Rows
+            ) -> Iterator[tuple[PileSoilInterface, int, float, float, dict[str, np.ndarray]]]:
+    """Per law, normal stress and held shear: the shear applied at once (no time passes).
+
+    Yields the law, the curve's number, the held shear (kPa), the slip (m) and the state; the
+    first row of the curve is written.
+    """
     for law in laws.values():
         curve = 0
         for sn in protocol.normal_stresses_kPa:
@@ -178,11 +181,19 @@ def creep_test(laws: Mapping[str, PileSoilInterface], protocol: InterfaceProtoco
                 w = float(a[0] * tau / (1.0 - b[0] * tau))
                 st, _ = _step(law, _start(law, sn), w, 0.0)
                 rows.add(law.variant, curve, 0.0, st, w, 0.0)
-                ds = 0.0
-                for i in range(1, protocol.steps + 1):
-                    st, ds = _hold_shear(law, st, tau, dt, ds)
-                    w += ds
-                    rows.add(law.variant, curve, i * dt, st, w, ds / dt)
+                yield law, curve, tau, w, st
+
+
+def creep_test(laws: Mapping[str, PileSoilInterface], protocol: InterfaceProtocol) -> Table:
+    """Each held shear applied at once, then held for ``days`` in ``steps`` equal steps."""
+    rows = _Rows()
+    dt = protocol.days / protocol.steps
+    for law, curve, tau, w, st in _loaded(laws, protocol, rows):
+        ds = 0.0
+        for i in range(1, protocol.steps + 1):
+            st, ds = _hold_shear(law, st, tau, dt, ds)
+            w += ds
+            rows.add(law.variant, curve, i * dt, st, w, ds / dt)
     return rows.table()
 
 
@@ -197,18 +208,10 @@ def relaxation_test(laws: Mapping[str, PileSoilInterface], protocol: InterfacePr
     rows = _Rows()
     times = relaxation_times(protocol.days, protocol.steps)
     zero = np.zeros((1, 3))
-    for law in laws.values():
-        curve = 0
-        for sn in protocol.normal_stresses_kPa:
-            for tau in held_shears(law, sn, protocol):
-                curve += 1
-                a, b = law.hyperbola(np.array([-sn]))
-                w = float(a[0] * tau / (1.0 - b[0] * tau))
-                st, _ = _step(law, _start(law, sn), w, 0.0)
-                rows.add(law.variant, curve, 0.0, st, w, 0.0)
-                for t0, t1 in zip(times[:-1], times[1:], strict=True):
-                    _, st, _ = law.update(zero, st, t1 - t0)
-                    rows.add(law.variant, curve, t1, st, w, 0.0)
+    for law, curve, _, w, st in _loaded(laws, protocol, rows):
+        for t0, t1 in zip(times[:-1], times[1:], strict=True):
+            _, st, _ = law.update(zero, st, t1 - t0)
+            rows.add(law.variant, curve, t1, st, w, 0.0)
     return rows.table()
 
 
