@@ -38,6 +38,11 @@ MM_PER_MIN = 1.0e-3 * 1440.0
 HOLD_TOL = 1.0e-10
 
 
+def _flag(key: str) -> str:
+    """The command-line option of a protocol field."""
+    return "--" + key.replace("_", "-")
+
+
 @dataclass(frozen=True)
 class InterfaceProtocol:
     """What the interface tests do (stresses kPa, slips mm, rates mm/min, time days)."""
@@ -55,17 +60,17 @@ class InterfaceProtocol:
         for key in ("normal_stresses_kPa", "rates_mm_per_min", "levels"):
             vals = getattr(self, key)
             if not vals or any(not (v > 0.0 and np.isfinite(v)) for v in vals):
-                raise ScenarioError(f"--{key}", list(vals), "must be one or more numbers > 0")
+                raise ScenarioError(_flag(key), list(vals), "must be one or more numbers > 0")
         if any(not (0.0 < v < 1.0) for v in self.levels):
             raise ScenarioError("--levels", list(self.levels), "must be fractions in (0, 1) of "
                                 "the hyperbola's asymptote p tan(delta)/R_f")
         if any(not (v > 0.0 and np.isfinite(v)) for v in self.shear_stresses_kPa):
-            raise ScenarioError("--shear_stresses_kPa", list(self.shear_stresses_kPa),
+            raise ScenarioError("--shear-stresses-kPa", list(self.shear_stresses_kPa),
                                 "must be numbers > 0")
         for key in ("rate_mm_per_min", "max_slip_mm", "days"):
             v = getattr(self, key)
             if not (v > 0.0 and np.isfinite(v)):
-                raise ScenarioError(f"--{key}", v, "must be a number > 0")
+                raise ScenarioError(_flag(key), v, "must be a number > 0")
         if not 2 <= self.steps <= 100_000:
             raise ScenarioError("--steps", self.steps, "must be an integer in [2, 100000]")
 

@@ -44,14 +44,14 @@ class SoilProtocol:
     def __post_init__(self) -> None:
         vals = self.confining_stresses_kPa
         if not vals or any(not (v > 0.0 and math.isfinite(v)) for v in vals):
-            raise ScenarioError("--confining_stresses_kPa", list(vals),
+            raise ScenarioError("--confining-stresses-kPa", list(vals),
                                 "must be one or more numbers > 0")
         if not 0.0 < self.max_axial_strain <= 0.5:
-            raise ScenarioError("--max_axial_strain", self.max_axial_strain, "must be in (0, 0.5]")
+            raise ScenarioError("--max-axial-strain", self.max_axial_strain, "must be in (0, 0.5]")
         if not 2 <= self.steps <= 100_000:
             raise ScenarioError("--steps", self.steps, "must be an integer in [2, 100000]")
         if not 0.0 < self.oedometer_start_kPa < self.oedometer_max_kPa:
-            raise ScenarioError("--oedometer_max_kPa", self.oedometer_max_kPa,
+            raise ScenarioError("--oedometer-max-kPa", self.oedometer_max_kPa,
                                 f"must be > the start, {self.oedometer_start_kPa:g} kPa")
 
 

@@ -194,3 +194,20 @@ def test_fit_scenario_bad_data(tmp_path, capsys):
     assert main(["fit", "scenario", "single_pile", "--data", str(data), "--vary",
                  "layers[0].E_MPa=1:6", "--out", str(tmp_path / "fit")]) == 2
     _one_error_line(capsys, "m.csv row 3", "settlement_m")
+
+
+@pytest.mark.parametrize("argv, words", [
+    (["interface-creep", "--scenario", "pier667", "--layer", "peat"], ("--layer", "'peat'",
+                                                                        "mud")),
+    (["interface-shear", "--scenario", "pier667"], ("--scenario and --layer go together",)),
+    (["interface-shear", "--K", "296", "--n", "0.29", "--R_f", "0.27"], ("--eta_MPa_day",
+                                                                         "missing")),
+    (["interface-shear", "--scenario", "pier667", "--layer", "mud", "--K", "-5"], ("K = -5",)),
+    (["interface-rate", "--scenario", "pier667", "--layer", "mud", "--rates-mm-per-min", "0"],
+     ("--rates-mm-per-min",)),
+    (["oedometer", "--E_MPa", "3", "--nu", "0.42", "--c_kPa", "5", "--phi_deg", "3"],
+     ("--e0", "missing")),
+])
+def test_lab_bad_parameters(argv, words, tmp_path, capsys):
+    assert main(["lab", *argv, "--out", str(tmp_path)]) == 2
+    _one_error_line(capsys, *words)

@@ -1,5 +1,7 @@
 """``pilegroup fit scenario``: back-analysis of a "measured" settlement history (slow tier).
 
+The measured layouts (settlement.csv, gauges.csv) are read back against their own run (fast).
+
 The measurement is a run of the bundled ``single_pile`` (coarsened by ``--set`` as the small
 scenario of the fast tests, output every quarter day to 2 days) with the mud's modulus 2.0 MPa
 instead of 3.0; the fit starts from the scenario's 3.0 MPa (50 % off) and must recover it
@@ -10,9 +12,12 @@ Measured on the shared 2-core machine: docs/results.md ("Back-analysis").
 import json
 import time
 
+import numpy as np
 import pytest
 
+from pilegroup.errors import ScenarioError
 from pilegroup.studies.cli.commands import main
+from pilegroup.studies.lab.scenario_fit import read_measured
 
 COARSE = ("numerics.mesh.size_m=1.0", "numerics.mesh.n_circ_min=8",
           "numerics.mesh.far_field_size_m=8.0", "numerics.mesh.dz_max_m=4.0",
@@ -54,3 +59,20 @@ def test_back_analysis_recovers_the_modulus(tmp_path, monkeypatch, capsys):
     with capsys.disabled():
         print(f"resumed: {resumed:.0f} s")
     assert resumed < wall / 3
+
+
+@pytest.mark.parametrize("name, layout", [("settlement.csv", "settlement"),
+                                          ("gauges.csv", "gauges")])
+def test_measured_history_read_back_from_its_run(small_pile_run, name, layout, tmp_path):
+    """A run's own history is the model's history at its rows; times beyond it are refused."""
+    m = read_measured(small_pile_run / name)
+    assert m.layout == layout and m.values.size >= 3
+    assert np.array_equal(m.model_values(small_pile_run), m.values)
+    late = tmp_path / name
+    rows = (small_pile_run / name).read_text().splitlines()
+    col = rows[0].split(",").index("t_day" if layout == "settlement" else "time_day")
+    last = rows[-1].split(",")
+    last[col] = "99"
+    late.write_text("\n".join([*rows, ",".join(last)]) + "\n")
+    with pytest.raises(ScenarioError, match="must lie within the model's output times"):
+        read_measured(late).model_values(small_pile_run)
