@@ -219,7 +219,7 @@ def fit_creep(path: Path, material: LabMaterial, variant: str | None = None,
     se, corr = statistics(res.jac, res.fun, all_names, np_, [1e-3, 1.0][:np_])
     values = (res.x[0] * 1e-3,) + ((float(res.x[1]),) if fit_N else ())
     details = (("variant", law.variant), ("curves", len(curves)), ("c_kPa", law.c),
-               ("phi_deg", law.phi_deg), ("N", law.N) if not fit_N else ("fit_N", True),
+               ("phi_deg", law.phi_deg), ("N_held", law.N) if not fit_N else ("fit_N", True),
                ("parameters from", material.source))
     result = FitResult("interface-creep", str(path), names, tuple(map(float, values)), se, corr,
                        rms(res.fun), "(relative)", res.fun.size, int(res.nfev), details)
