@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 from matplotlib import colormaps
@@ -10,8 +11,10 @@ from matplotlib.figure import Figure
 
 from pilegroup.studies.lab.fit_stats import FitResult
 from pilegroup.studies.lab.interface_fit import CurveFit
-from pilegroup.studies.lab.scenario_fit import LAYOUTS, ScenarioFit, case_name
 from pilegroup.studies.report.plots import save_figure
+
+if TYPE_CHECKING:  # the scenario fit needs MPI and the solver; the curve fits do not
+    from pilegroup.studies.lab.scenario_fit import ScenarioFit
 
 
 def curve_fit_figure(cf: CurveFit) -> Figure:
@@ -51,10 +54,10 @@ def curve_fit_figure(cf: CurveFit) -> Figure:
 def scenario_fit_figure(fit: ScenarioFit, result: FitResult) -> Figure:
     """Measured values against the best run's, over time; residuals below."""
     data = fit.data
-    best = fit.model[case_name(result.values)]
+    best = fit.values_at(result.values)
     fig = Figure(figsize=(7.5, 7.0))
     ax, axr = fig.subplots(2, 1, height_ratios=[3, 1.4])
-    unit = LAYOUTS[data.layout][2]
+    unit = fit.unit
     scale, label = (1e3, "settlement (mm)") if data.layout == "settlement" else (1e6,
                                                                                 "strain (1e-6)")
     if data.layout == "settlement":
@@ -62,16 +65,19 @@ def scenario_fit_figure(fit: ScenarioFit, result: FitResult) -> Figure:
     else:
         keys = sorted(set(zip(data.table["pile"], data.table["section"], strict=True)))
         groups = [(data.table["pile"] == p) & (data.table["section"] == s) for p, s in keys]
-    for k, m in enumerate(groups):
+    labels = (["settlement"] if data.layout == "settlement" else
+              [f"pile {p:g}, section {s:g}" for p, s in keys])
+    for k, (m, lab) in enumerate(zip(groups, labels, strict=True)):
         col = colormaps["viridis"](0.1 + 0.75 * k / max(len(groups) - 1, 1))
         o = np.argsort(data.times[m], kind="stable")
-        ax.plot(data.times[m][o], scale * data.values[m][o], "o", ms=4, color=col)
+        ax.plot(data.times[m][o], scale * data.values[m][o], "o", ms=4, color=col, label=lab)
         ax.plot(data.times[m][o], scale * best[m][o], "-", color=col)
         axr.plot(data.times[m][o], scale * (best - data.values)[m][o], ".", color=col)
     vals = fit.describe(result.values)
     ax.set_title(f"fit: {vals}\n(markers measured, lines the model; {len(fit.cases)} runs)",
                  fontsize="medium")
     ax.set(xlabel="time (days)", ylabel=label)
+    ax.legend(fontsize="x-small")
     axr.axhline(0.0, color="0.4", lw=0.8)
     axr.set(xlabel="time (days)", ylabel=f"model - measured ({'mm' if unit == 'm' else '1e-6'})")
     for a in (ax, axr):

@@ -207,6 +207,15 @@ class ScenarioFit:
                            f"{rec.get('status', 'not run')}: {rec.get('message')}")
         return self.data.model_values(run_dir)
 
+    def values_at(self, p: Sequence[float]) -> np.ndarray:
+        """The model's values at the measured rows of the run of point ``p`` (run before)."""
+        return self.model[case_name(p)]
+
+    @property
+    def unit(self) -> str:
+        """The unit of the measured values."""
+        return LAYOUTS[self.data.layout][2]
+
     def describe(self, p: Sequence[float]) -> str:
         """``key = value, ...`` of a point."""
         return ", ".join(f"{v.key} = {x:.6g}" for v, x in zip(self.vary, p, strict=True))
