@@ -17,7 +17,9 @@ import pytest
 
 from pilegroup.errors import ScenarioError
 from pilegroup.studies.cli.commands import main
-from pilegroup.studies.lab.scenario_fit import read_measured
+from pilegroup.studies.lab.fit_plots import write_scenario_fit_figure
+from pilegroup.studies.lab.fit_stats import FitResult
+from pilegroup.studies.lab.scenario_fit import ScenarioFit, VaryKey, case_name, read_measured
 
 COARSE = ("numerics.mesh.size_m=1.0", "numerics.mesh.n_circ_min=8",
           "numerics.mesh.far_field_size_m=8.0", "numerics.mesh.dz_max_m=4.0",
@@ -68,6 +70,12 @@ def test_measured_history_read_back_from_its_run(small_pile_run, name, layout, t
     m = read_measured(small_pile_run / name)
     assert m.layout == layout and m.values.size >= 3
     assert np.array_equal(m.model_values(small_pile_run), m.values)
+    fit = ScenarioFit("single_pile", {}, [VaryKey(KEY, 1.0, 6.0)], m, tmp_path / "fit")
+    fit.cases[case_name([3.0])] = (3.0,)
+    fit.model[case_name([3.0])] = m.model_values(small_pile_run)
+    res = FitResult("scenario", name, (KEY,), (3.0,), (0.0,), ((1.0,),), 0.0, fit.unit,
+                    m.values.size, 1)
+    assert write_scenario_fit_figure(tmp_path / "fit.png", fit, res).stat().st_size > 10_000
     late = tmp_path / name
     rows = (small_pile_run / name).read_text().splitlines()
     col = rows[0].split(",").index("t_day" if layout == "settlement" else "time_day")
