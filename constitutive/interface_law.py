@@ -180,6 +180,19 @@ class PileSoilInterface(DruckerPragerCone):
         t = np.hypot(tr[:, 1], tr[:, 2])
         return self._F(t, tr[:, 0])[0]
 
+    def creep_rate(self, traction: np.ndarray) -> np.ndarray:
+        """Viscoplastic slip rate (m/day) at tractions ``(n, 3)`` held constant.
+
+        ``(F0/eta) <F/F0>^N dF/d|tau|``: at constant ``sigma_n`` and ``tau`` the yield function
+        is constant, so the slip of a creep test grows at this rate (both integrators integrate
+        it exactly, docs/model.md). Zero without viscosity (``viscous=False``).
+        """
+        tr = as_points(traction, 3, "traction")
+        t = np.hypot(tr[:, 1], tr[:, 2])
+        F, _, _, g, _, _ = self._F(t, tr[:, 0])
+        phi, _ = self._rate(F, 1.0)
+        return phi * g if self.viscous else np.zeros_like(t)
+
     def _F(self, t: np.ndarray, s: np.ndarray) -> tuple[np.ndarray, ...]:
         """Return F, dF/dt, dF/ds, g = dF/dt, dg/dt, dg/ds (flow magnitude factor g)."""
         al, k = self.alpha, self.k

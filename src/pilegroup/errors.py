@@ -7,6 +7,8 @@ Which class names which kind of failure:
 * :class:`ConstitutiveError`: a parameter or input of a constitutive law is invalid;
 * :class:`SolverError` and its subclasses: a solver input is invalid, or a run failed (the CLI
   exits with code 1);
+* :class:`FitError`: a fit of parameters to data did not converge or left a parameter
+  undetermined (the CLI exits with code 1);
 * :class:`RunInterrupted`: a run stopped on SIGTERM or SIGINT after saving a checkpoint (the
   CLI exits with code 128 + the signal number: 143 or 130);
 * :class:`FolderBusy` (a :class:`ScenarioError`): another run holds the lock of the output
@@ -138,6 +140,10 @@ class StepFailure(SolverError):
         super().__init__(message)
         self.t, self.load_factor, self.stage = t, load_factor, stage
         self.run_log = run_log
+
+
+class FitError(PilegroupError):
+    """A fit did not converge, or the data do not determine a fitted parameter (exit code 1)."""
 
 
 class RunInterrupted(PilegroupError):

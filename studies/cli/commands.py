@@ -28,6 +28,7 @@ from pilegroup.fileio import write_text_atomic
 from pilegroup.model import BUNDLED, PilegroupError, ScenarioError, bundled_text, load_scenario
 from pilegroup.model.loader import parse_override
 from pilegroup.studies.cli.batch_commands import COMMANDS as BATCH_COMMANDS
+from pilegroup.studies.cli.lab_commands import COMMANDS as LAB_COMMANDS
 from pilegroup.studies.run.interrupt import abort_job
 
 log = logging.getLogger("pilegroup")
@@ -298,7 +299,7 @@ def build_parser() -> argparse.ArgumentParser:
         ("report", "plots and a Markdown summary of a run's output folder", _report_arguments),
     ):
         add_arguments(sub.add_parser(name, help=help_, description=DESCRIPTIONS[name]))
-    for name, help_, description, add_arguments in BATCH_COMMANDS:
+    for name, help_, description, add_arguments in BATCH_COMMANDS + LAB_COMMANDS:
         add_arguments(sub.add_parser(name, help=help_, description=description))
     return p
 

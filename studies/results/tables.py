@@ -98,8 +98,9 @@ GAUGE_VALUES = COLUMNS[GAUGES_CSV][4:]
 Table = dict[str, np.ndarray]
 
 
-def _columns_error(path: Path, header: list[str], problem: str) -> ScenarioError:
-    required = ", ".join(COLUMNS[path.name])
+def _columns_error(path: Path, header: list[str], problem: str,
+                   columns: tuple[str, ...]) -> ScenarioError:
+    required = ", ".join(columns)
     return ScenarioError(f"{path} header", ",".join(header),
                          f"{problem}; required columns: {required}")
 
@@ -114,23 +115,39 @@ def read_csv(path: Path) -> Table | None:
     """
     if not path.is_file():
         return None
-    with path.open(newline="", encoding="utf-8") as fh:
-        rows = [r for r in csv.reader(fh) if any(x.strip() for x in r)]
+    return read_table(path, COLUMNS[path.name], TEXT_COLUMNS)
+
+
+def read_table(path: Path, columns: tuple[str, ...], text: frozenset[str] = frozenset(),
+               optional: tuple[str, ...] = ()) -> Table:
+    """The ``columns`` (all required) and those of ``optional`` present in the CSV ``path``.
+
+    Columns in ``text`` are read as strings, the others as numbers (an empty cell is NaN). A
+    missing file, a missing column, a short row or a non-numeric value is a
+    :class:`ScenarioError` naming the file, the row, the column and the value.
+    """
+    if not path.is_file():
+        raise ScenarioError("file", str(path), "no such file")
+    try:
+        with path.open(newline="", encoding="utf-8") as fh:
+            rows = [r for r in csv.reader(fh) if any(x.strip() for x in r)]
+    except (UnicodeDecodeError, csv.Error) as exc:
+        raise ScenarioError("file", str(path), f"is not a UTF-8 CSV file ({exc})") from None
     header = [h.strip() for h in rows[0]] if rows else []
     if not header:
-        raise _columns_error(path, header, "no header row")
-    missing = [c for c in COLUMNS[path.name] if c not in header]
+        raise _columns_error(path, header, "no header row", columns)
+    missing = [c for c in columns if c not in header]
     if missing:
-        raise _columns_error(path, header, f"missing column {missing[0]!r}")
+        raise _columns_error(path, header, f"missing column {missing[0]!r}", columns)
     body = rows[1:]
     for n, row in enumerate(body, start=2):
         if len(row) < len(header):
             raise ScenarioError(f"{path} row {n}", ",".join(row),
                                 f"{len(row)} fields, the header has {len(header)}")
     table: Table = {}
-    for c in COLUMNS[path.name]:
+    for c in (*columns, *(o for o in optional if o in header)):
         i = header.index(c)
-        if c in TEXT_COLUMNS:
+        if c in text:
             table[c] = np.array([r[i].strip() for r in body], dtype=str)
             continue
         vals = np.empty(len(body))

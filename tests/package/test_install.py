@@ -10,7 +10,8 @@ import pytest
 ROOT = Path(__file__).resolve().parents[2]
 SUBPACKAGES = ["model", "model.scenarios", "geometry", "constitutive", "solver", "studies",
                "studies.results", "studies.run", "studies.report", "studies.batch",
-               "studies.verification", "studies.campaigns", "studies.bench", "studies.cli"]
+               "studies.verification", "studies.campaigns", "studies.lab", "studies.bench",
+               "studies.cli"]
 PROBE = (
     "import importlib, sys\n"
     "import pilegroup\n"

@@ -19,12 +19,14 @@ FOLDERS = {"model": "pilegroup.model", "geometry": "pilegroup.geometry",
            "constitutive": "pilegroup.constitutive", "solver": "pilegroup.solver",
            "studies": "pilegroup.studies", "src/pilegroup": "pilegroup"}
 #: Which layer may import which (data flows one way: model -> geometry -> solver -> studies;
-#: inside studies: results -> report -> run -> batch, verification -> campaigns -> bench -> cli).
+#: inside studies: results -> report -> run -> batch, verification -> campaigns, lab -> bench
+#: -> cli).
 LAYER = {"pilegroup": 0, "pilegroup.constitutive": 1, "pilegroup.model": 1,
          "pilegroup.geometry": 2, "pilegroup.solver": 3, "pilegroup.studies": 4,
          "pilegroup.studies.results": 4.1, "pilegroup.studies.report": 4.2,
          "pilegroup.studies.run": 4.3, "pilegroup.studies.batch": 4.4,
          "pilegroup.studies.verification": 4.4, "pilegroup.studies.campaigns": 4.5,
+         "pilegroup.studies.lab": 4.5,
          "pilegroup.studies.bench": 4.6, "pilegroup.studies.cli": 4.7,
          "pilegroup.__main__": 5}
 MAX_MODULE, MAX_FUNCTION = 500, 80
