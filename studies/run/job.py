@@ -106,6 +106,8 @@ def _run(sc: Scenario, geo: ResolvedGeometry, out: Path, stop_after: str, comm: 
         "ranks": comm.size,
         "wall_s": time.perf_counter() - t0,
     }
+    if solved is not None and "capacity" in solved:
+        summary["capacity"] = solved["capacity"]
     if comm.rank == 0:
         log.info("wrote %s", write_job_summary(out, summary))
     return summary
