@@ -90,6 +90,13 @@ class FolderBusy(ScenarioError):
     """The output folder is locked by a run that is still going (``--out`` names it)."""
 
 
+class MachineTooSmall(ScenarioError):
+    """The run's estimated peak memory per rank exceeds what the machine has available.
+
+    Raised before meshing (``studies.run.memory_check``); ``--force`` runs anyway.
+    """
+
+
 class OutputError(OSError):
     """An output file of a run could not be written; the message names the file and why.
 

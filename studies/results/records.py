@@ -104,6 +104,9 @@ class JobSummary(TypedDict, total=False):
     """Failed or interrupted: where the solver's partial summary is."""
     capacity: dict[str, Any]
     """Complete, with a capacity stage: its result (as ``solver.capacity``)."""
+    memory: dict[str, Any]
+    """Complete: the memory estimate made before meshing, the memory available then and the
+    peak resident memory each rank measured (``studies.run.memory_check``)."""
 
 
 def write_job_summary(out: Path, summary: JobSummary) -> Path:

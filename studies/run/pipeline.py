@@ -16,6 +16,7 @@ import logging
 import math
 import os
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -341,6 +342,31 @@ def xdmf_label(symmetry: str) -> str | None:
     return f"{symmetry}_model_{part}_reflect_about_" + "_and_".join(f"{a}0" for a in planes)
 
 
+def _step_hook(sc: Scenario, probes: tuple[PileProbe, LoadSettlementCurve, SettlementSeries,
+                                            CapacityProbe | None], bar: tqdm
+               ) -> Callable[[BiotProblem, float, str], None]:
+    """What a run does after every accepted step: record, show progress, check for runaway.
+
+    A capacity stage is not checked for runaway (the failure is its result): its probe
+    records the step and applies the stage's own stop rule instead.
+    """
+    piles, curve, settlement, capacity = probes
+
+    def on_step(problem: BiotProblem, t: float, stage: str) -> None:
+        piles.record_step(t)
+        curve.record(t, stage)
+        w = settlement.probe()
+        bar.n = t
+        bar.set_postfix_str(f"{stage}, settlement {1000 * w:.2f} mm")
+        if capacity is not None and stage == capacity.stage:
+            capacity.record(t, stage)
+            capacity.check(t, stage)
+        else:
+            check_runaway(sc, w, t, problem.load_factor, stage)
+
+    return on_step
+
+
 def run_coupled(sc: Scenario, geo: ResolvedGeometry, md: MeshData, out: Path,
                 preset: str | None = None, resume: dict[str, Any] | None = None
                 ) -> RunSummary:
@@ -401,19 +427,7 @@ def run_coupled(sc: Scenario, geo: ResolvedGeometry, md: MeshData, out: Path,
     bar = tqdm(total=sc.time.end_day, initial=sc.time.start_day, unit="day", desc=sc.name,
                disable=pb.comm.rank != 0 or quiet,
                bar_format="{desc}: {n:.3g}/{total:g} day |{bar}| {elapsed}{postfix}")
-
-    def on_step(problem: BiotProblem, t: float, stage: str) -> None:
-        piles.record_step(t)
-        curve.record(t, stage)
-        w = settlement.probe()
-        bar.n = t
-        bar.set_postfix_str(f"{stage}, settlement {1000 * w:.2f} mm")
-        if capacity is not None and stage == capacity.stage:  # failure is this stage's result
-            capacity.record(t, stage)
-            capacity.check(t, stage)
-        else:
-            check_runaway(sc, w, t, problem.load_factor, stage)
-
+    on_step = _step_hook(sc, (piles, curve, settlement, capacity), bar)
     try:
         run_log = run_stages(pb, stages, time_stepping(sc), on_step=on_step,
                              geostatic_tol=GEOSTATIC_TOL_M, exports=exports, state=state,
