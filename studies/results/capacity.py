@@ -11,7 +11,8 @@ foundation fails. Its curve is read by two criteria:
   load if no segment fell below the threshold before it, bracketed from above by the load of
   the step that failed.
 * ``settlement_10pct_d``: the load at which the settlement reaches 10 % of the pile diameter
-  (EN 1997-1, 7.6.1.1(3)), interpolated linearly between the points of the curve.
+  (EN 1997-1, 7.6.1.1(3)), interpolated linearly between the points of the curve; the load
+  step of the segment it lies on (``load_step_kN``) says how well the curve resolves it.
 
 The ultimate capacity is the smaller of the criteria reached; ``None`` when neither is.
 """
@@ -58,15 +59,22 @@ def plunging_load(load: np.ndarray, settlement: np.ndarray, ratio: float
 
 def settlement_load(load: np.ndarray, settlement: np.ndarray, limit_m: float) -> float | None:
     """The load (kN) at which the settlement first reaches ``limit_m``, or None."""
+    found = _settlement_segment(load, settlement, limit_m)
+    return None if found is None else found[0]
+
+
+def _settlement_segment(load: np.ndarray, settlement: np.ndarray, limit_m: float
+                        ) -> tuple[float, float] | None:
+    """``(load at limit_m, load step of the segment holding it)`` (kN), or None."""
     q, w = np.asarray(load, float), np.asarray(settlement, float)
     above = np.flatnonzero(w >= limit_m)
     if above.size == 0:
         return None
     i = int(above[0])
     if i == 0:
-        return float(q[0])
+        return float(q[0]), 0.0
     f = (limit_m - w[i - 1]) / (w[i] - w[i - 1])
-    return float(q[i - 1] + f * (q[i] - q[i - 1]))
+    return float(q[i - 1] + f * (q[i] - q[i - 1])), float(q[i] - q[i - 1])
 
 
 def capacity_criteria(load: np.ndarray, settlement: np.ndarray, diameter_m: float,
@@ -95,7 +103,8 @@ def capacity_criteria(load: np.ndarray, settlement: np.ndarray, diameter_m: floa
         if failed is not None:
             bracket = [float(q[-1]), float(failed) * load_scale_kN]
     limit = SETTLEMENT_PER_DIAMETER * diameter_m
-    q_w = settlement_load(q, w, limit)
+    seg = _settlement_segment(q, w, limit)
+    q_w = None if seg is None else seg[0]
     reached = {k: v for k, v in (("plunging", q_pl), ("settlement_10pct_d", q_w))
                if v is not None}
     governing = min(reached, key=lambda k: reached[k]) if reached else None
@@ -106,7 +115,8 @@ def capacity_criteria(load: np.ndarray, settlement: np.ndarray, diameter_m: floa
                      "bracket_kN": bracket,
                      "settlement_m": float(w[i_pl]) if i_pl is not None else
                      (float(w[-1]) if q_pl is not None else None)},
-        "settlement_10pct_d": {"load_kN": q_w, "settlement_m": limit},
+        "settlement_10pct_d": {"load_kN": q_w, "settlement_m": limit,
+                               "load_step_kN": None if seg is None else seg[1]},
         "ultimate_kN": reached[governing] if governing else None,
         "governing": governing,
         "initial_stiffness_kN_per_m": float(k_fin[0]) if k_fin.size else None,
