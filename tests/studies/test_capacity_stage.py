@@ -166,3 +166,51 @@ def test_capacity_run_fails_the_foundation_and_completes(small_pile, run_cli, tm
     pile = cap["piles"][0]  # one pile carries the whole load (head force from its stress)
     assert pile["settlement_10pct_d"]["load_kN"] == pytest.approx(q_w, rel=0.02)
     assert (out / "plots" / "capacity.png").is_file()
+
+
+def test_capacity_run_killed_inside_the_stage_resumes_to_the_same_capacity(small_pile, tmp_path):
+    """A checkpoint at day 0.7 (inside the stage), SIGKILL, --resume: the straight run's curve."""
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+    from pathlib import Path
+
+    bin_ = Path(sys.executable).parent
+    sets = (*CAPACITY, "outputs.xdmf=false", "outputs.plots=false",
+            "time.output_days=[0.0, 0.5, 0.7, 2.0]")
+    env = {**os.environ, "PILEGROUP_MESH_CACHE": str(tmp_path / "cache")}
+
+    def cmd(out, resume=False):
+        c = [str(bin_ / "pilegroup"), "run", small_pile, "--out", str(out)]
+        return c + [a for kv in sets for a in ("--set", kv)] + (["--resume"] if resume else [])
+
+    ref, run = tmp_path / "ref", tmp_path / "run"
+    assert subprocess.run(cmd(ref), capture_output=True, env=env, timeout=300).returncode == 0
+    proc = subprocess.Popen(cmd(run), stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                            env=env)
+    manifest = run / "checkpoint" / "manifest.json"
+    deadline = time.monotonic() + 300
+    try:
+        while True:
+            try:
+                if json.loads(manifest.read_text())["t_day"] >= 0.7:
+                    break
+            except (OSError, ValueError, KeyError):
+                pass
+            assert proc.poll() is None, "the run ended before its checkpoint in the stage"
+            assert time.monotonic() < deadline
+            time.sleep(0.02)
+        proc.send_signal(signal.SIGKILL)
+        proc.wait(timeout=60)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    r = subprocess.run(cmd(run, resume=True), capture_output=True, text=True, env=env,
+                       timeout=300)
+    assert r.returncode == 0, r.stderr[-2000:]
+    assert (ref / "capacity.csv").read_text() == (run / "capacity.csv").read_text()
+    a = json.loads((ref / "summary.json").read_text())["capacity"]
+    b = json.loads((run / "summary.json").read_text())["capacity"]
+    assert a["group"] == b["group"] and a["end"]["reason"] == b["end"]["reason"]
