@@ -63,9 +63,16 @@ STAGE_KEYS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
     "surcharge": (("surcharge_kPa", "duration_day"), ("area_m",)),
     "groundwater": (("drawdown_m", "duration_day"), ()),
     "installation": ((), ()),
+    "capacity": (("max_load_kN", "duration_day"),
+                 ("plunging_stiffness_ratio", "single_pile_capacity_kN")),
 }
 _STAGE_UNITS = {"cap_load_kN": "kN", "duration_day": "day", "until_day": "day",
-                "surcharge_kPa": "kPa", "area_m": "m", "drawdown_m": "m"}
+                "surcharge_kPa": "kPa", "area_m": "m", "drawdown_m": "m", "max_load_kN": "kN",
+                "plunging_stiffness_ratio": "-", "single_pile_capacity_kN": "kN"}
+
+#: Default of ``plunging_stiffness_ratio``: the foundation plunges once its tangent stiffness
+#: falls below 2 % of its initial one (docs/model.md, "Capacity").
+PLUNGING_STIFFNESS_RATIO = 0.02
 
 
 @dataclass(frozen=True)
@@ -80,13 +87,16 @@ class Stage:
     ``area_m``, never beneath the cap, and held afterwards) or ``groundwater`` (the water
     table lowered by ``drawdown_m`` over ``duration_day``, held afterwards) or ``installation``
     (the moment the piles and cap are installed, instantaneous: before it the ground moves
-    without them). Every action keeps its value in the stages that follow; docs/model.md
-    ("Ground that moves") gives the physics.
+    without them) or ``capacity`` (the cap load raised linearly from its value so far to
+    ``max_load_kN`` over ``duration_day`` until the foundation fails: the last stage; its
+    result is the load–settlement curve and the ultimate capacity, docs/model.md, "Capacity").
+    Every action keeps its value in the stages that follow; docs/model.md ("Ground that
+    moves") gives the physics.
     """
 
     name: str
     kind: Literal["geostatic", "load", "consolidation", "surcharge", "groundwater",
-                  "installation"]
+                  "installation", "capacity"]
     cap_load_kN: float | None = None
     """Load stage: the vertical cap load at the stage end, kN."""
     duration_day: float | None = None
@@ -100,6 +110,15 @@ class Stage:
     coordinates of the site (origin at the pile group's centre); default: the whole surface."""
     drawdown_m: float | None = None
     """Groundwater stage: lowering of the water table, m (negative: the water table rises)."""
+    max_load_kN: float | None = None
+    """Capacity stage: the largest cap load tried, kN (reached at the end of ``duration_day``
+    unless the foundation fails first)."""
+    plunging_stiffness_ratio: float | None = None
+    """Capacity stage: plunging once the tangent stiffness of the load–settlement curve falls
+    below this fraction of its initial value (default :data:`PLUNGING_STIFFNESS_RATIO`)."""
+    single_pile_capacity_kN: float | None = None
+    """Capacity stage: the capacity of one pile alone (e.g. from a capacity run of the single
+    pile), kN; the group efficiency is reported when it is given."""
 
     def __post_init__(self) -> None:
         required, optional = STAGE_KEYS[self.kind]
@@ -115,6 +134,13 @@ class Stage:
         if self.cap_load_kN is not None:
             require_non_negative("cap_load_kN", self.cap_load_kN, "kN")
             check_bound("stages.cap_load_kN", self.cap_load_kN)
+        for key in ("max_load_kN", "single_pile_capacity_kN"):
+            if getattr(self, key) is not None:
+                require_positive(key, getattr(self, key), "kN")
+                check_bound("stages.cap_load_kN", getattr(self, key), key)
+        if self.plunging_stiffness_ratio is not None:
+            require_in_range("plunging_stiffness_ratio", self.plunging_stiffness_ratio, 0.0, 1.0,
+                             "-", lo_open=True, hi_open=True)
         if self.duration_day is not None:
             require_positive("duration_day", self.duration_day, "day")
             check_bound("stages.duration_day", self.duration_day)

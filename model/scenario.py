@@ -182,6 +182,23 @@ class Scenario:
                 t = until
             if st.kind == "surcharge":
                 self._check_surcharge(i, st)
+        self._check_capacity()
+
+    def _check_capacity(self) -> None:
+        """A capacity stage is the last stage and raises the load beyond the cap load so far."""
+        kinds = [st.kind for st in self.stages]
+        if "capacity" not in kinds:
+            return
+        i = kinds.index("capacity")
+        if i != len(kinds) - 1:
+            raise ScenarioError(f"stages[{i}].kind", "capacity",
+                                f"must be the last stage (stages[{i + 1}] follows it): the"
+                                " foundation has failed at its end")
+        st = self.stages[i]
+        before = [s.cap_load_kN for s in self.stages[:i] if s.kind == "load"]
+        if before and st.max_load_kN <= before[-1]:  # type: ignore[operator]
+            raise ScenarioError(f"stages[{i}].max_load_kN", st.max_load_kN,
+                                f"must be > the cap load before it ({before[-1]:g} kN)", "kN")
 
     def _check_surcharge(self, i: int, st: Stage) -> None:
         """The loaded rectangle lies on the ground surface."""
@@ -293,6 +310,15 @@ class Scenario:
         return next((st for st in self.stages if st.kind == "installation"), None)
 
     def total_cap_load(self) -> float:
-        """Cap load (kN) at the end of the last load stage."""
-        loads = [st.cap_load_kN for st in self.stages if st.kind == "load"]
-        return float(loads[-1]) if loads else 0.0
+        """Cap load (kN) at the end of the last load stage (a capacity stage's ``max_load_kN``).
+
+        Load factor 1 stands for this load.
+        """
+        loads = [st.max_load_kN if st.kind == "capacity" else st.cap_load_kN
+                 for st in self.stages if st.kind in ("load", "capacity")]
+        return float(loads[-1]) if loads else 0.0  # type: ignore[arg-type]
+
+    @property
+    def capacity_stage(self) -> Stage | None:
+        """The stage that raises the load until the foundation fails, or None."""
+        return next((st for st in self.stages if st.kind == "capacity"), None)

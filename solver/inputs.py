@@ -418,30 +418,40 @@ class SolverStage:
             over ``duration``; ``duration = 0`` is one instantaneous, undrained step),
             ``"ground"`` (the ground actions ramped linearly to ``ground`` over ``duration``,
             the load factor held; ``duration = 0`` is instantaneous), ``"consolidation"``
-            (every action held to the stage end) or ``"install"`` (the structure, held still
+            (every action held to the stage end), ``"install"`` (the structure, held still
             and free of the soil's shear until then, joins the soil: the problem's
-            ``install_structure``; an instant).
+            ``install_structure``; an instant) or ``"capacity"`` (a load stage that ends, and
+            ends the run, where the stepper finds no equilibrium even at ``dt_min``, or where a
+            step callback raises :class:`~pilegroup.errors.CapacityReached`: failure is its
+            result, recorded in ``RunLog.capacity_end``).
         duration: day.
-        load_factor: load factor at the end of a load stage (loads with ``ramp``).
+        load_factor: load factor at the end of a load or capacity stage (loads with ``ramp``).
         ground: a ground stage's amplitudes of the ground actions at its end (the ``action``
             indices of :class:`SurfaceLoad` and :class:`PressureBC`); the stages before set
             the start (all 0 at first).
         dt0: first step of this stage (day); ``None`` keeps the stepper's current size.
+        dt_max: largest step of this stage (day; ``None``: the run's), e.g. so that a capacity
+            stage's curve has enough points.
     """
 
     name: str
-    kind: Literal["geostatic", "load", "ground", "consolidation", "install"]
+    kind: Literal["geostatic", "load", "ground", "consolidation", "install", "capacity"]
     duration: float = 0.0
     load_factor: float = 1.0
     ground: tuple[float, ...] = ()
     dt0: float | None = None
+    dt_max: float | None = None
 
     def __post_init__(self) -> None:
-        if self.kind not in ("geostatic", "load", "ground", "consolidation", "install"):
+        if self.kind not in ("geostatic", "load", "ground", "consolidation", "install",
+                             "capacity"):
             raise SolverInputError(f"stage {self.name!r}: kind = {self.kind!r}")
         if self.kind == "install" and self.duration != 0.0:
             raise SolverInputError(f"stage {self.name!r}: an install stage is an instant"
                                    f" (duration = {self.duration!r}; allowed: 0)")
+        if self.kind == "capacity" and not self.duration > 0.0:
+            raise SolverInputError(f"stage {self.name!r}: a capacity stage ramps its load over"
+                                   f" a duration > 0 (duration = {self.duration!r})")
         if self.ground and self.kind != "ground":
             raise SolverInputError(f"stage {self.name!r}: ground amplitudes need kind 'ground'")
         require_non_negative(f"stage {self.name!r} duration", self.duration, "day",

@@ -7,6 +7,7 @@ Data only, below the stepper (:mod:`pilegroup.solver.stepping`, which writes it)
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 
 @dataclass
@@ -31,6 +32,10 @@ class RunLog:
     rejected: int = 0
     geostatic_max_u: float | None = None
     wall_s: float = 0.0
+    capacity_end: dict[str, Any] | None = None
+    """How a capacity stage ended (``solver.stepping``): ``reason`` (``no equilibrium``,
+    ``stopped`` or ``max load``), ``t_day``, ``load_factor`` of the last equilibrium,
+    ``failed_load_factor`` (the step that found none, when the stepper gave up) and ``message``."""
 
     @property
     def newton_total(self) -> int:

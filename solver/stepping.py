@@ -21,6 +21,14 @@ Stages (docs/model.md):
 * ``ground``: the amplitudes of the ground actions (surcharges, water table) ramped linearly to
   the stage's values, the load factor held; ``duration = 0`` is instantaneous.
 * ``consolidation``: every action held to the stage end.
+* ``capacity``: the load factor ramped as in a load stage until the foundation fails. Load
+  control cannot pass the peak of the load–settlement curve: near the limit load Newton stops
+  converging, the step is cut back by ``cut`` until it would fall below ``dt_min``, and the
+  limit load is then bracketed between the last equilibrium and the load of the last step
+  tried. That is the stage's result, not an error: the stage (and the run: nothing follows a
+  failed foundation) ends at the last equilibrium, with ``RunLog.capacity_end`` saying how. A
+  step callback may end it earlier by raising :class:`~pilegroup.errors.CapacityReached` (e.g.
+  once the settlement is past every criterion); reaching the stage's load ends it too.
 * ``install``: the structure (piles and cap), held still and free of the soil's shear since
   the start, joins the soil at this instant (``problem.install_structure``); the ground may
   have moved before. No step is solved: the state is in equilibrium as it is.
@@ -40,7 +48,7 @@ import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
-from pilegroup.errors import SolverError, StepFailure
+from pilegroup.errors import CapacityReached, SolverError, StepFailure
 from pilegroup.solver.exports import Export
 from pilegroup.solver.inputs import SolverStage, StepControl
 from pilegroup.solver.runlog import RunLog, StepRecord
@@ -80,6 +88,7 @@ class AdaptiveStepper:
         on_step: Callback | None = None,
         on_boundary: Callable[[float, bool], None] | None = None,
         ground: Callable[[float], tuple[float, ...]] | None = None,
+        dt_max: float | None = None,
     ) -> float:
         """Advance from ``t0`` to ``t1`` (day); returns ``t1``.
 
@@ -89,15 +98,17 @@ class AdaptiveStepper:
         ``(t0, t1]`` (``t1`` included); ``on_step(problem, t, stage)`` after every accepted step
         (e.g. a progress bar); ``on_boundary(t, output)`` at every step boundary, after the
         step was accepted (and its milestone written: ``output`` true) or rejected: the safe
-        points where a run may save a checkpoint or stop.
+        points where a run may save a checkpoint or stop. ``dt_max``: a smaller largest step
+        than the run's for this advance.
         """
         ts = self.ts
+        dt_cap = ts.dt_max if dt_max is None else min(dt_max, ts.dt_max)
         marks = sorted({float(m) for m in (*milestones, *ts.milestones) if t0 < m < t1} | {t1})
         t = t0
         for m in marks:
             landed = False
             while t < m:
-                dt = min(self.dt, ts.dt_max)
+                dt = min(self.dt, dt_cap)
                 landing = t + dt * (1.0 + 1e-9) >= m or (m - t - dt) < 1e-3 * dt
                 if landing:
                     dt = m - t
@@ -151,7 +162,7 @@ class AdaptiveStepper:
             raise StepFailure(
                 f"stage {stage!r}: step at t = {t:.6g} day failed with dt = "
                 f"{dt:.3g} day (< dt_min after cut): {info.message}",
-                t, load_factor(t), stage)
+                t, load_factor(t), stage, failed_load_factor=load_factor(t + dt))
 
     def _grow(self, dt: float, newton_its: int) -> None:
         """After an accepted (non-landing) step of size ``dt``: keep it, or grow it."""
@@ -282,7 +293,7 @@ class _Run:
         g = (0.0,) * self.n_ground
         for i, st in enumerate(self.stages):
             t1 = t + st.duration
-            lam1 = st.load_factor if st.kind == "load" else lam
+            lam1 = st.load_factor if st.kind in ("load", "capacity") else lam
             g1 = tuple(st.ground) + g[len(st.ground):] if st.kind == "ground" else g
             if i < s.stage or (i == s.stage and s.done):
                 if st.kind == "install":  # a resumed run's structure is in place again
@@ -301,6 +312,12 @@ class _Run:
             elif st.kind in ("load", "ground") and st.duration == 0.0:
                 self._set_ground(g1)
                 self._instantaneous(st, t, lam, lam1, on_milestone)
+            elif st.kind == "capacity":
+                if st.dt0 is not None and not resume:
+                    self.stepper.dt = st.dt0
+                self._capacity(st, (t, t1, lam, lam1), s.t if resume else t, on_milestone,
+                               on_step, g)
+                break  # nothing follows a failed foundation
             else:
                 if st.dt0 is not None and not resume:
                     self.stepper.dt = st.dt0
@@ -309,6 +326,28 @@ class _Run:
             t, lam, g = t1, lam1, g1
         log.wall_s = time.perf_counter() - t_wall
         return log
+
+    def _capacity(self, st: SolverStage, span: tuple[float, float, float, float], t_from: float,
+                  on_milestone: Callback, on_step: Callback | None, g: tuple[float, ...]
+                  ) -> None:
+        """A capacity stage: a load ramp that ends where the foundation fails (module doc)."""
+        t0, t1, lam0, lam1 = span
+        end: dict[str, object]
+        try:
+            self._advance(st, span, t_from, on_milestone, on_step, (g, g))
+            end = {"reason": "max load", "t_day": t1, "load_factor": lam1,
+                   "failed_load_factor": None, "message": "the stage's largest load carried"}
+        except StepFailure as exc:  # rolled back to the last equilibrium
+            end = {"reason": "no equilibrium", "t_day": exc.t, "load_factor": exc.load_factor,
+                   "failed_load_factor": exc.failed_load_factor, "message": str(exc)}
+        except CapacityReached as exc:  # the step was accepted and committed
+            end = {"reason": "stopped", "t_day": exc.t, "load_factor": exc.load_factor,
+                   "failed_load_factor": None, "message": exc.reason}
+        self.state.log.capacity_end = end
+        if end["reason"] != "max load":
+            t, lam = float(end["t_day"]), float(end["load_factor"])  # type: ignore[arg-type]
+            on_milestone(self.problem, t, st.name)
+            self.at_boundary(t, lam, True, done=True)
 
     def _set_ground(self, g: tuple[float, ...]) -> None:
         if self.n_ground:
@@ -379,6 +418,6 @@ class _Run:
 
         self.stepper.advance(self.problem, t_from, t1, lam_of, st.name,
                              on_milestone=on_milestone, on_step=on_step, on_boundary=boundary,
-                             ground=ground_of if self.n_ground else None)
+                             ground=ground_of if self.n_ground else None, dt_max=st.dt_max)
         if t1 <= t_from:  # nothing to step (zero duration): the stage end is reached as is
             self.at_boundary(t1, lam1, True, done=True)

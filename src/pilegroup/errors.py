@@ -92,6 +92,13 @@ class FolderBusy(ScenarioError):
     """The output folder is locked by a run that is still going (``--out`` names it)."""
 
 
+class MachineTooSmall(ScenarioError):
+    """The run's estimated peak memory per rank exceeds what the machine has available.
+
+    Raised before meshing (``studies.run.memory_check``); ``--force`` runs anyway.
+    """
+
+
 class OutputError(OSError):
     """An output file of a run could not be written; the message names the file and why.
 
@@ -136,10 +143,25 @@ class StepFailure(SolverError):
     """
 
     def __init__(self, message: str, t: float = 0.0, load_factor: float = 0.0,
-                 stage: str = "", run_log: object | None = None) -> None:
+                 stage: str = "", run_log: object | None = None,
+                 failed_load_factor: float | None = None) -> None:
         super().__init__(message)
         self.t, self.load_factor, self.stage = t, load_factor, stage
         self.run_log = run_log
+        #: the load factor of the last step tried (and failed), when the stepper knows it
+        self.failed_load_factor = failed_load_factor
+
+
+class CapacityReached(PilegroupError):
+    """A capacity stage has found what it looks for (raised by a step callback to end it).
+
+    Not an error of the run: the stage ends at the state reached, ``t`` (day) with
+    ``load_factor``; ``reason`` says why (e.g. the settlement limit).
+    """
+
+    def __init__(self, reason: str, t: float, load_factor: float) -> None:
+        super().__init__(reason)
+        self.reason, self.t, self.load_factor = reason, t, load_factor
 
 
 class FitError(PilegroupError):

@@ -1,7 +1,9 @@
 """The numerical stress suite: the small scenario under extreme steps, soils, loads and options.
 
 ``pilegroup bench stability`` runs the small scenario (:mod:`pilegroup.studies.bench.small_pile`)
-through the cases of :func:`stress_cases`, each one ``pilegroup run`` with ``--set``
+through the cases of :func:`stress_cases` (with a capacity stage, whose failed foundation must end
+``complete`` with its capacity, and a mesh too large for the machine, which must be refused
+before meshing), each one ``pilegroup run`` with ``--set``
 overrides in its own process group under a timeout, so that a crash or a hang is a row of the
 table and not the end of the benchmark. A case must finish, or stop cleanly: exit 1 with one
 line (``no equilibrium beyond load factor ...`` when the stepper gives up) and ``summary.json``
@@ -12,8 +14,9 @@ traceback, a hang, or a non-finite number in any CSV, JSON, XDMF or HDF5 output
 Per case the table gives the status, exit code, wall time, accepted and rejected steps and
 Newton iterations (``summary_solver.json``, also written by a run that stopped), the settlement
 at the last accepted step (``load_settlement.csv``), the largest ``|p|`` over the output times
-and the final state, whether a non-finite number was found, and the message. Results:
-``bench_stability.json`` and ``bench_stability.md`` in the output folder.
+and the final state, the memory estimate per rank against the measured peak (``summary.json``),
+whether a non-finite number was found, and the message (for a capacity stage, its result).
+Results: ``bench_stability.json`` and ``bench_stability.md`` in the output folder.
 """
 
 from __future__ import annotations
@@ -47,7 +50,7 @@ from pilegroup.studies.bench.benchrun import (
 from pilegroup.studies.bench.small_pile import small_pile_scenario, small_pile_text
 
 COLUMNS = ("case", "overrides", "status", "exit", "wall_s", "steps", "rejected", "newton",
-           "settlement_mm", "max_abs_p_kPa", "nan", "message")
+           "settlement_mm", "max_abs_p_kPa", "memory_mb", "nan", "message")
 
 #: Outcomes that are a clean end of a case (with no non-finite number written).
 CLEAN = ("complete", "stopped", "failed", "invalid input")
@@ -131,6 +134,36 @@ def _load_cases(sc: Scenario) -> list[StressCase]:
     ]
 
 
+def _capacity_cases(sc: Scenario) -> list[StressCase]:
+    """The last stage made a capacity stage: the foundation must fail and the run complete.
+
+    Up to 10 x the cap load over the stage: Q1-Q1, Q2-Q1, and a tied pile with Q2-Q1, where
+    the stepper gives up at the limit load (bracketed by its cut-backs).
+    """
+    last = len(sc.stages) - 1
+    q = sc.total_cap_load()
+
+    def capacity(f: float) -> tuple[str, ...]:
+        return (f'stages[{last}].kind="capacity"', f"stages[{last}].max_load_kN={_num(q * f)}",
+                f"stages[{last}].duration_day={_num(sc.time.end_day - 0.5)}")
+
+    return [
+        StressCase("capacity", "capacity", capacity(10.0), "capacity stage to 10 x the load"),
+        StressCase("capacity_Q2Q1", "capacity", (*capacity(10.0), 'numerics.element="Q2Q1"'),
+                   "capacity stage, Q2-Q1 (no locking under isochoric plastic flow)"),
+        StressCase("capacity_tied_Q2Q1", "capacity",
+                   (*capacity(10.0), 'interface.mode="tied"', 'numerics.element="Q2Q1"'),
+                   "capacity stage, tied pile, Q2-Q1: the stepper finds no equilibrium"),
+    ]
+
+
+def _memory_cases() -> list[StressCase]:
+    """A mesh far too large for the machine: refused before meshing (exit 2, one line)."""
+    return [StressCase("memory_too_large", "memory",
+                       ("numerics.mesh.size_m=0.05", "numerics.mesh.far_field_size_m=0.05"),
+                       "0.05 m elements everywhere: ~2e5 MB per rank estimated")]
+
+
 def _option_cases() -> list[StressCase]:
     """Interface modes, law variants and integrators; the element pairs."""
     out = [StressCase("interface_tied", "interface", ('interface.mode="tied"',)),
@@ -154,7 +187,8 @@ def stress_cases(sc: Scenario) -> tuple[StressCase, ...]:
                              stiff[-1].note + ", tied pile")
     return tuple([*_time_cases(sc),
                   *_layer_cases(sc, "k_m_per_day", "permeability", (1e-12, 1e3), "k"),
-                  *stiff, lowest_tied, *_load_cases(sc), *_option_cases()])
+                  *stiff, lowest_tied, *_load_cases(sc), *_option_cases(),
+                  *_capacity_cases(sc), *_memory_cases()])
 
 
 # ---------------------------------------------------------------------------- output checks
@@ -244,6 +278,28 @@ def end_settlement_mm(folder: Path) -> float | None:
     return 1000.0 * float(rows[-1]["settlement_m"]) if rows else None
 
 
+def capacity_line(cap: dict[str, Any]) -> str:
+    """One line of a capacity result: the ultimate load, each criterion, how the stage ended."""
+    g = cap.get("group") or {}
+
+    def kn(x: float | None) -> str:
+        return "-" if x is None else f"{x:.4g} kN"
+
+    end = cap.get("end") or {}
+    return (f"capacity {kn(g.get('ultimate_kN'))} ({g.get('governing')}); plunging "
+            f"{kn((g.get('plunging') or {}).get('load_kN'))}, at 10 % D "
+            f"{kn((g.get('settlement_10pct_d') or {}).get('load_kN'))}; stage end: "
+            f"{end.get('reason')}")
+
+
+def memory_cell(mem: dict[str, Any] | None) -> str:
+    """``estimate / measured peak`` per rank (MB) of a run's ``summary.json`` memory record."""
+    if not mem:
+        return ""
+    peak = max(mem.get("peak_rss_mb_per_rank") or [0.0])
+    return f"{mem['estimate_mb_per_rank']:.0f} / {peak:.0f}"
+
+
 # ---------------------------------------------------------------------------- one case
 def classify(fin: Finished, summary: dict[str, Any] | None) -> tuple[str, str]:
     """The outcome of a run and its message line.
@@ -281,7 +337,10 @@ def case_row(case: StressCase, folder: Path, fin: Finished, diameter_m: float
     status, message = classify(fin, summary)
     bad = nonfinite_files(folder) if folder.is_dir() else []
     settlement = end_settlement_mm(folder)
-    if status == "complete" and settlement is not None \
+    capacity = (summary or {}).get("capacity")
+    if status == "complete" and capacity:
+        message = capacity_line(capacity)
+    elif status == "complete" and settlement is not None \
             and settlement > 1000.0 * FAILURE_SETTLEMENT_PER_DIAMETER * diameter_m:
         message = (f"settlement {settlement / 1000:.3g} m > 10 % of the pile diameter "
                    "(a failed pile by EN 1997-1)")
@@ -291,6 +350,7 @@ def case_row(case: StressCase, folder: Path, fin: Finished, diameter_m: float
             "rejected": solver.get("rejected_steps"), "newton": solver.get("newton_iterations"),
             "settlement_mm": _round(settlement), "max_abs_p_kPa": _round(
                 max_abs_pressure(folder, solver) if folder.is_dir() else None),
+            "memory_mb": memory_cell((summary or {}).get("memory")),
             "nan": ("yes: " + ", ".join(bad)) if bad else "no",
             "message": message if len(message) <= 200 else message[:197] + "...",
             "full_message": message, "clean": status in CLEAN and not bad}
@@ -342,6 +402,6 @@ def bench_stability(out_dir: str | Path = "out/bench_stability",
     return rows
 
 
-__all__ = ["CLEAN", "COLUMNS", "StressCase", "bench_stability", "case_row", "classify",
-           "end_settlement_mm", "max_abs_pressure", "nonfinite_files",
+__all__ = ["CLEAN", "COLUMNS", "StressCase", "bench_stability", "capacity_line", "case_row",
+           "classify", "memory_cell", "end_settlement_mm", "max_abs_pressure", "nonfinite_files",
            "run_case", "stress_cases"]

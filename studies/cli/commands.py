@@ -130,7 +130,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
     out = Path(args.out) if args.out else Path("out") / sc.name
     with stop_on_signals():  # SIGTERM/SIGINT: checkpoint at the next step boundary, then stop
         summary = run_scenario(sc, out, mesh_size=args.mesh_size, stop_after=args.stop_after,
-                               resume=args.resume)
+                               resume=args.resume, force=args.force)
     if _world_rank() == 0:
         print(json.dumps(summary, indent=2))
     return 0
@@ -148,6 +148,9 @@ def _run_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--resume", action="store_true",
                    help="continue from the last checkpoint in --out (same scenario, --set "
                    "values and rank count); a complete run is not run again")
+    p.add_argument("--force", action="store_true",
+                   help="run even when the memory estimate per rank (printed for every run) "
+                   "exceeds the memory available per rank (without it: exit 2 before meshing)")
     p.set_defaults(func=_cmd_run)
 
 

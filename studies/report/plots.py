@@ -171,6 +171,42 @@ def plot_load_settlement(run: RunData) -> Figure:
     return fig
 
 
+def plot_capacity(run: RunData) -> Figure:
+    """The capacity stage's load–settlement curves (group and piles) with the criteria marked."""
+    assert run.capacity is not None
+    c = run.capacity
+    solver = run.summary.get("solver") or {}
+    cap = (solver.get("capacity") if isinstance(solver, dict) else None) or {}
+    fig = Figure(figsize=(7.5, 5.0))
+    ax = fig.subplots()
+    piles = np.unique(c["pile"]).astype(int)
+    for i in piles:
+        m = c["pile"] == i
+        ax.plot(1000 * c["settlement_m"][m], c["load_kN"][m], marker="." if i == 0 else None,
+                lw=2.0 if i == 0 else 0.8, label="group (cap load)" if i == 0 else None,
+                color="C0" if i == 0 else "0.6")
+    if len(piles) > 1:
+        ax.plot([], [], color="0.6", lw=0.8, label="each pile (head force)")
+    group = cap.get("group") or {}
+    crit = group.get("settlement_10pct_d") or {}
+    if crit.get("settlement_m") is not None:
+        ax.axvline(1000 * crit["settlement_m"], color="C1", ls="--", lw=1.0,
+                   label="10 % of the pile diameter")
+    for key, color, label in (("settlement_10pct_d", "C1", "at 10 % D"),
+                              ("plunging", "C3", "plunging")):
+        q = (group.get(key) or {}).get("load_kN")
+        if q is not None:
+            ax.axhline(q, color=color, ls=":", lw=1.0, label=f"{label}: {q:.4g} kN")
+    ax.set_xlabel("settlement (mm, down)")
+    ax.set_ylabel("load (kN)")
+    ult = group.get("ultimate_kN")
+    ax.set_title("Capacity: " + (f"ultimate {ult:.4g} kN ({group.get('governing')})"
+                                 if ult is not None else "no criterion reached"))
+    ax.legend(fontsize="small", loc="lower right")
+    ax.grid(alpha=0.3)
+    return fig
+
+
 #: Every figure: file name, caption, the RunData table it needs, plotting function.
 FIGURES: tuple[tuple[str, str, str, Callable[[RunData], Figure]], ...] = (
     ("settlement_time.png", "Cap settlement against time", "settlement", plot_settlement),
@@ -189,6 +225,8 @@ FIGURES: tuple[tuple[str, str, str, Callable[[RunData], Figure]], ...] = (
     ("pile_loads.png", "Pile head forces at the last output time", "loads", plot_pile_loads),
     ("load_settlement.png", "Load–settlement curve (every accepted step)", "load_settlement",
      plot_load_settlement),
+    ("capacity.png", "Capacity stage: load–settlement curves and the capacity criteria",
+     "capacity", plot_capacity),
     *GAUGE_FIGURES,
     *GROUND_FIGURES,
 )

@@ -58,6 +58,9 @@ class RunSummary(SolverSummary, total=False):
     """The checkpoints written (time, reason, files)."""
     failure: str
     """One line: why the run found no equilibrium (only after a failure)."""
+    capacity: dict[str, Any]
+    """A run with a capacity stage: the criteria, group and piles
+    (``studies.run.capacity_probe.CapacityProbe.result``)."""
 
 
 class MeshRecord(TypedDict):
@@ -99,6 +102,11 @@ class JobSummary(TypedDict, total=False):
     """Interrupted: how to continue."""
     solver_summary: str
     """Failed or interrupted: where the solver's partial summary is."""
+    capacity: dict[str, Any]
+    """Complete, with a capacity stage: its result (as ``solver.capacity``)."""
+    memory: dict[str, Any]
+    """Complete: the memory estimate made before meshing, the memory available then and the
+    peak resident memory each rank measured (``studies.run.memory_check``)."""
 
 
 def write_job_summary(out: Path, summary: JobSummary) -> Path:

@@ -22,6 +22,7 @@ import numpy as np
 
 from pilegroup.model import ScenarioError
 from pilegroup.studies.results.tables import (
+    CAPACITY_CSV,
     GAUGES_CSV,
     LAYER_HISTORY_CSV,
     LOAD_SETTLEMENT_CSV,
@@ -39,7 +40,7 @@ log = logging.getLogger(__name__)
 
 #: The CSV files a run folder is read from, in this order.
 RUN_FILES = (SETTLEMENT_CSV, PROFILES_CSV, LAYER_HISTORY_CSV, LOADS_CSV, LOAD_SETTLEMENT_CSV,
-             GAUGES_CSV, NEUTRAL_PLANE_CSV, SETTLEMENT_PROFILES_CSV, TROUGH_CSV)
+             GAUGES_CSV, NEUTRAL_PLANE_CSV, SETTLEMENT_PROFILES_CSV, TROUGH_CSV, CAPACITY_CSV)
 
 #: Default centre pile of a 3 x 3 group numbered row by row.
 DEFAULT_CENTRE_PILE = 5
@@ -82,6 +83,8 @@ class RunData:
     """``settlement_profiles.csv``, every pile and the free field (``pile = 0``)."""
     trough: Table | None = None
     """``surface_trough.csv``."""
+    capacity: Table | None = None
+    """``capacity.csv`` (a run with a capacity stage), the group and every pile."""
 
     @property
     def complete(self) -> bool | None:
@@ -172,7 +175,7 @@ def load_run(out_dir: Path) -> RunData:
                    raw[LOAD_SETTLEMENT_CSV], summary, centre,
                    _end_of_loading(raw[SETTLEMENT_CSV], scenario), names,
                    _centre_only(GAUGES_CSV, raw[GAUGES_CSV], centre), raw[NEUTRAL_PLANE_CSV],
-                   raw[SETTLEMENT_PROFILES_CSV], raw[TROUGH_CSV])
+                   raw[SETTLEMENT_PROFILES_CSV], raw[TROUGH_CSV], raw[CAPACITY_CSV])
 
 
 def layer_series(run: RunData, column: str) -> dict[int, tuple[np.ndarray, np.ndarray]]:

@@ -33,7 +33,15 @@ positive down; forces kN; stresses kPa; displacements m.
   the pile, the excess pore pressure at the shaft; ``pile = 0``: the free field, axial force
   and pile settlement empty);
 * ``surface_trough.csv``: ``t_day,x_m,settlement_m`` (the ground surface through the group's
-  centre, parallel to x).
+  centre, parallel to x);
+* ``capacity.csv`` (runs with a capacity stage): ``t_day,pile,load_factor,load_kN,settlement_m,
+  tangent_stiffness_kN_per_m``: the load–settlement curve of the capacity stage, starting from
+  the state before it; ``pile = 0`` is the group (the cap load and the cap settlement, or the
+  load on every pile head and their mean settlement without a cap), ``pile = i`` pile ``i``
+  (its head force due to the loads, from its top element layer, and its settlement there);
+  the tangent stiffness of the segment ending at the row (empty at the first row and where the
+  settlement did not grow). The criteria read off it are in ``summary.json``
+  (:mod:`pilegroup.studies.results.capacity`).
 """
 
 from __future__ import annotations
@@ -55,6 +63,7 @@ GAUGES_CSV = "gauges.csv"
 NEUTRAL_PLANE_CSV = "neutral_plane.csv"
 SETTLEMENT_PROFILES_CSV = "settlement_profiles.csv"
 TROUGH_CSV = "surface_trough.csv"
+CAPACITY_CSV = "capacity.csv"
 
 _LAYER_MEANS = ("t_day", "pile", "layer", "layer_name", "depth_top_m", "depth_bottom_m",
                 "shaft_friction_kPa", "relative_displacement_m", "viscoplastic_slip_m",
@@ -77,6 +86,8 @@ COLUMNS: dict[str, tuple[str, ...]] = {
     SETTLEMENT_PROFILES_CSV: ("t_day", "pile", "depth_m", "axial_force_kN", "pile_settlement_m",
                               "soil_settlement_m", "excess_pore_pressure_kPa"),
     TROUGH_CSV: ("t_day", "x_m", "settlement_m"),
+    CAPACITY_CSV: ("t_day", "pile", "load_factor", "load_kN", "settlement_m",
+                   "tangent_stiffness_kN_per_m"),
 }
 #: The columns that hold text; all others hold numbers.
 TEXT_COLUMNS = frozenset({"stage", "layer_name"})
@@ -91,6 +102,7 @@ GAUGE_COLUMNS = ",".join(COLUMNS[GAUGES_CSV])
 NEUTRAL_PLANE_COLUMNS = ",".join(COLUMNS[NEUTRAL_PLANE_CSV])
 SETTLEMENT_PROFILE_COLUMNS = ",".join(COLUMNS[SETTLEMENT_PROFILES_CSV])
 TROUGH_COLUMNS = ",".join(COLUMNS[TROUGH_CSV])
+CAPACITY_COLUMNS = ",".join(COLUMNS[CAPACITY_CSV])
 #: The value columns of ``gauges.csv`` (after time, pile, section and depth).
 GAUGE_VALUES = COLUMNS[GAUGES_CSV][4:]
 

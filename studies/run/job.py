@@ -16,10 +16,12 @@ from pilegroup.geometry.adapter import ResolvedGeometry, resolve_geometry
 from pilegroup.geometry.convert import build_mesh
 from pilegroup.geometry.output import mesh_outputs
 from pilegroup.model import Scenario
+from pilegroup.solver.exports import peak_rss_mb
 from pilegroup.studies.report.run_report import write_report
 from pilegroup.studies.results.records import JobSummary, write_job_summary
 from pilegroup.studies.run.checkpoint import check_resume, completed_summary, remove_checkpoint
 from pilegroup.studies.run.folder_lock import folder_lock
+from pilegroup.studies.run.memory_check import memory_check
 from pilegroup.studies.run.pipeline import run_coupled
 
 log = logging.getLogger(__name__)
@@ -27,7 +29,7 @@ log = logging.getLogger(__name__)
 
 def run_scenario(sc: Scenario, out: Path, mesh_size: float | None = None,
                  stop_after: str = "solve", comm: MPI.Comm = MPI.COMM_WORLD,
-                 resume: bool = False) -> JobSummary:
+                 resume: bool = False, force: bool = False) -> JobSummary:
     """Run scenario ``sc`` on ``comm`` and write its outputs to ``out``; returns the summary.
 
     Validate, write the resolved scenario (``scenario.json``), build the mesh once and write
@@ -42,6 +44,11 @@ def run_scenario(sc: Scenario, out: Path, mesh_size: float | None = None,
     not run again (its summary is returned). Without it, an older checkpoint in ``out`` is
     removed first.
 
+    Before anything is written or meshed the run's peak memory per rank is estimated and
+    compared with the memory available
+    (:func:`~pilegroup.studies.run.memory_check.memory_check`): a run that cannot fit raises
+    :class:`~pilegroup.errors.MachineTooSmall` unless ``force``.
+
     The run holds the lock of ``out`` for its life
     (:func:`~pilegroup.studies.run.folder_lock.folder_lock`): while another run holds it,
     :class:`~pilegroup.errors.FolderBusy` is raised before anything is read or written.
@@ -53,11 +60,11 @@ def run_scenario(sc: Scenario, out: Path, mesh_size: float | None = None,
     if resume and stop_after != "solve":
         raise ScenarioError("--stop-after", stop_after, "only 'solve' with --resume")
     with folder_lock(out, comm):
-        return _locked_run(sc, out, stop_after, comm, resume, t0)
+        return _locked_run(sc, out, stop_after, comm, resume, t0, force)
 
 
 def _locked_run(sc: Scenario, out: Path, stop_after: str, comm: MPI.Comm, resume: bool,
-                t0: float) -> JobSummary:
+                t0: float, force: bool = False) -> JobSummary:
     """:func:`run_scenario` once the folder is locked."""
     manifest = check_resume(out, sc, comm) if resume else None
     if manifest is not None:
@@ -67,14 +74,15 @@ def _locked_run(sc: Scenario, out: Path, stop_after: str, comm: MPI.Comm, resume
                 log.info("the run in %s is complete (t = %g day); nothing to resume", out,
                          manifest["t_day"])
             return done
+    geo = resolve_geometry(sc)  # the one resolution of the scenario's geometry in a run
+    memory = memory_check(sc, geo, comm, force)  # before anything is written or meshed
     if comm.rank == 0:
         out.mkdir(parents=True, exist_ok=True)
         write_json_atomic(out / "scenario.json", sc)
         if manifest is None:
             remove_checkpoint(out)
-    geo = resolve_geometry(sc)  # the one resolution of the scenario's geometry in a run
     try:
-        summary = _run(sc, geo, out, stop_after, comm, t0, manifest)
+        summary = _run(sc, geo, out, stop_after, comm, t0, manifest, memory)
         if comm.rank == 0 and summary["solver"] is not None and sc.outputs.plots:
             for path in write_report(out):  # a figure not written fails the run too
                 log.info("wrote %s", path)
@@ -90,7 +98,7 @@ def _locked_run(sc: Scenario, out: Path, stop_after: str, comm: MPI.Comm, resume
 
 
 def _run(sc: Scenario, geo: ResolvedGeometry, out: Path, stop_after: str, comm: MPI.Comm,
-         t0: float, resume: dict[str, Any] | None) -> JobSummary:
+         t0: float, resume: dict[str, Any] | None, memory: dict[str, Any]) -> JobSummary:
     """Mesh and solve; writes ``summary.json`` with ``status = "complete"``."""
     t_mesh = time.perf_counter()
     md = build_mesh(geo.spec, comm)
@@ -106,6 +114,9 @@ def _run(sc: Scenario, geo: ResolvedGeometry, out: Path, stop_after: str, comm: 
         "ranks": comm.size,
         "wall_s": time.perf_counter() - t0,
     }
+    summary["memory"] = memory | {"peak_rss_mb_per_rank": comm.allgather(peak_rss_mb())}
+    if solved is not None and "capacity" in solved:
+        summary["capacity"] = solved["capacity"]
     if comm.rank == 0:
         log.info("wrote %s", write_job_summary(out, summary))
     return summary

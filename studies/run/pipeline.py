@@ -16,6 +16,7 @@ import logging
 import math
 import os
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -54,6 +55,7 @@ from pilegroup.solver import (
 from pilegroup.solver.probes import facet_area
 from pilegroup.studies.results.records import SOLVER_SUMMARY_JSON, RunSummary
 from pilegroup.studies.results.tables import GAUGES_CSV
+from pilegroup.studies.run.capacity_probe import CapacityProbe
 from pilegroup.studies.run.checkpoint import Checkpoints
 from pilegroup.studies.run.gauge_probe import GaugeProbe
 from pilegroup.studies.run.ground_probe import GroundProbe
@@ -74,6 +76,11 @@ GEOSTATIC_TOL_M = 1e-4
 #: are measured to converge on the pier system; ``fieldsplit_gamg`` is not (docs/benchmarks.md),
 #: so ``auto`` never picks it.
 DIRECT_MAX_DOFS = 50_000
+
+#: A capacity stage's steps are at most its duration over this many: the load–settlement
+#: curve, and with it the tangent stiffness of the plunging criterion, gets at least as many
+#: points (docs/model.md, "Capacity").
+CAPACITY_STEPS = 50
 
 #: Width (m) of the soil around the pile–soil interface that ``fieldsplit_pier`` solves exactly
 #: with the structure (:func:`band_layers`).
@@ -279,6 +286,10 @@ def solver_stages(sc: Scenario) -> list[SolverStage]:
             out.append(SolverStage(st.name, "geostatic"))
         elif st.kind == "installation":
             out.append(SolverStage(st.name, "install"))
+        elif st.kind == "capacity":  # at least CAPACITY_STEPS points on the curve
+            dt = (t1 - t0) / CAPACITY_STEPS
+            out.append(SolverStage(st.name, "capacity", duration=t1 - t0, load_factor=1.0,
+                                   dt0=min(dt, sc.numerics.time.dt_initial_day), dt_max=dt))
         elif st.kind == "load":
             lf = st.cap_load_kN / total if total > 0 else 0.0  # type: ignore[operator]
             out.append(SolverStage(st.name, "load", duration=t1 - t0, load_factor=lf))
@@ -331,6 +342,31 @@ def xdmf_label(symmetry: str) -> str | None:
     return f"{symmetry}_model_{part}_reflect_about_" + "_and_".join(f"{a}0" for a in planes)
 
 
+def _step_hook(sc: Scenario, probes: tuple[PileProbe, LoadSettlementCurve, SettlementSeries,
+                                            CapacityProbe | None], bar: tqdm
+               ) -> Callable[[BiotProblem, float, str], None]:
+    """What a run does after every accepted step: record, show progress, check for runaway.
+
+    A capacity stage is not checked for runaway (the failure is its result): its probe
+    records the step and applies the stage's own stop rule instead.
+    """
+    piles, curve, settlement, capacity = probes
+
+    def on_step(problem: BiotProblem, t: float, stage: str) -> None:
+        piles.record_step(t)
+        curve.record(t, stage)
+        w = settlement.probe()
+        bar.n = t
+        bar.set_postfix_str(f"{stage}, settlement {1000 * w:.2f} mm")
+        if capacity is not None and stage == capacity.stage:
+            capacity.record(t, stage)
+            capacity.check(t, stage)
+        else:
+            check_runaway(sc, w, t, problem.load_factor, stage)
+
+    return on_step
+
+
 def run_coupled(sc: Scenario, geo: ResolvedGeometry, md: MeshData, out: Path,
                 preset: str | None = None, resume: dict[str, Any] | None = None
                 ) -> RunSummary:
@@ -355,6 +391,8 @@ def run_coupled(sc: Scenario, geo: ResolvedGeometry, md: MeshData, out: Path,
     piles = PileProbe(sc, geo, pb, out)
     gauges = GaugeProbe(sc, pb, piles, out / GAUGES_CSV) if sc.outputs.gauge_depths_m else None
     ground = GroundProbe(sc, pb, piles, out)
+    capacity = CapacityProbe(sc, pb, piles, settlement.probe, out) \
+        if sc.capacity_stage is not None else None
 
     def summary(complete: bool) -> RunSummary:
         return {"complete": complete, "dofs": pb.num_dofs, "centre_pile": piles.centre,
@@ -367,12 +405,15 @@ def run_coupled(sc: Scenario, geo: ResolvedGeometry, md: MeshData, out: Path,
                                  for t, s, w in settlement.history],
                 "settlement_sign": "positive = downward (compression-positive habit)",
                 "resumed_from_day": resume["t_day"] if resume is not None else None,
-                "checkpoints": ckpt.written, "wall_s": time.perf_counter() - t0}
+                "checkpoints": ckpt.written, "wall_s": time.perf_counter() - t0,
+                **({"capacity": capacity.result()} if capacity is not None else {})}
 
     writer = SummaryWriter(out / SOLVER_SUMMARY_JSON, pb.comm, summary)
     curve = LoadSettlementCurve(pb, settlement.probe, sc.total_cap_load(),
                                 out / "load_settlement.csv")
     exports: list[Export] = [settlement, piles, ground, curve]
+    if capacity is not None:  # after the pile probe, which sets the forces' zero
+        exports.append(capacity)
     if gauges is not None:
         exports.append(gauges)
     if sc.outputs.xdmf:
@@ -386,15 +427,7 @@ def run_coupled(sc: Scenario, geo: ResolvedGeometry, md: MeshData, out: Path,
     bar = tqdm(total=sc.time.end_day, initial=sc.time.start_day, unit="day", desc=sc.name,
                disable=pb.comm.rank != 0 or quiet,
                bar_format="{desc}: {n:.3g}/{total:g} day |{bar}| {elapsed}{postfix}")
-
-    def on_step(problem: BiotProblem, t: float, stage: str) -> None:
-        piles.record_step(t)
-        curve.record(t, stage)
-        w = settlement.probe()
-        bar.n = t
-        bar.set_postfix_str(f"{stage}, settlement {1000 * w:.2f} mm")
-        check_runaway(sc, w, t, problem.load_factor, stage)
-
+    on_step = _step_hook(sc, (piles, curve, settlement, capacity), bar)
     try:
         run_log = run_stages(pb, stages, time_stepping(sc), on_step=on_step,
                              geostatic_tol=GEOSTATIC_TOL_M, exports=exports, state=state,
@@ -408,6 +441,8 @@ def run_coupled(sc: Scenario, geo: ResolvedGeometry, md: MeshData, out: Path,
         raise StepFailure(msg, exc.t, exc.load_factor, exc.stage, exc.run_log) from exc
     finally:
         bar.close()
+    if capacity is not None:
+        capacity.finish(run_log.capacity_end)
     data = run_summary(pb, run_log, summary(True))
     writer.finish(data)
     return data

@@ -113,6 +113,12 @@ def make_run(out: Path, slopes: dict[int, float] | None = None, shape: str = "ea
                 for s, z in enumerate(GAUGE_DEPTHS, start=1)]
         write_csv(out / "gauges.csv", list(COLUMNS["gauges.csv"]), rows)
     _ground_tables(out, files)
+    if "capacity.csv" in files:  # a capacity stage's curve: stiff, then plunging at 20 MN
+        w = [0.0, 0.01, 0.02, 0.04, 0.08, 0.2]
+        q = [10856.0, 15000.0, 18000.0, 19500.0, 19900.0, 20000.0]
+        rows = [[1.0 + k, p, k / 10, qi / (1 if p == 0 else 9), wi, ""]
+                for p in (0, 1, CENTRE) for k, (qi, wi) in enumerate(zip(q, w, strict=True))]
+        write_csv(out / "capacity.csv", list(COLUMNS["capacity.csv"]), rows)
     (out / "summary.json").write_text(json.dumps({"scenario": "synthetic", "complete": complete,
                                                   "centre_pile": CENTRE}))
     return out

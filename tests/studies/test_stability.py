@@ -65,6 +65,24 @@ def test_a_load_far_above_capacity_stops_with_one_line(fast_rows):
     assert r["steps"] == solver["steps"] >= 1 and r["rejected"] == solver["rejected_steps"] >= 1
 
 
+def test_capacity_and_memory_entries(tmp_path, monkeypatch):
+    """A failed foundation in a capacity stage is complete with its capacity; a mesh too large
+    for the machine is refused before meshing with one line."""
+    monkeypatch.setenv("PILEGROUP_MESH_CACHE", str(tmp_path / "cache"))
+    rows = {r["case"]: r for r in bs.bench_stability(
+        tmp_path, ["capacity", "memory_too_large"], timeout=300,
+        extra_sets=("outputs.plots=false",))}
+    cap = rows["capacity"]
+    assert (cap["status"], cap["exit"], cap["clean"]) == ("complete", 0, True), cap
+    assert cap["message"].startswith("capacity ") and cap["settlement_mm"] > 800.0
+    est, peak = (float(x) for x in cap["memory_mb"].split(" / "))
+    assert 0.5 <= est / peak <= 2.0
+    mem = rows["memory_too_large"]
+    assert (mem["status"], mem["exit"], mem["clean"]) == ("invalid input", 2, True), mem
+    assert "MB per rank estimated" in mem["full_message"]
+    assert not (tmp_path / "memory_too_large" / "mesh").exists()
+
+
 def test_tables_are_written(fast_rows):
     out, rows = fast_rows
     data = json.loads((out / "bench_stability.json").read_text())
@@ -92,7 +110,8 @@ def test_cases_scale_the_scenario_values():
                                  for j, lay in enumerate(sc.layers)}
     assert values("load_x10") == {"stages[1].cap_load_kN": 10 * sc.total_cap_load()}
     groups = {c.group for c in cases.values()}
-    assert groups == {"time step", "permeability", "stiffness", "load", "interface", "element"}
+    assert groups == {"time step", "permeability", "stiffness", "load", "interface", "element",
+                      "capacity", "memory"}
 
 
 def test_nonfinite_files_reads_numbers_not_words(tmp_path):

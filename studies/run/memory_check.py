@@ -1,0 +1,146 @@
+"""Will the run fit in this machine's memory? An estimate per rank before meshing.
+
+Before gmsh starts, a run estimates its peak resident memory per rank and compares it with the
+memory available to each of its ranks on the node; a run that cannot fit stops with
+:class:`~pilegroup.errors.MachineTooSmall` (exit 2, the estimate and the available memory in one
+line) unless ``--force`` is given. The estimate is logged for every run and written to
+``summary.json`` (``memory``), beside the peak the run measured.
+
+The estimate (docs/benchmarks.md, "Memory estimate before meshing"):
+
+* cells: the graded-mesh integral of :func:`pilegroup.model.mesh_estimate.estimated_cells`
+  without its safety factor (the central estimate: 17,325 against the 18,266 hexahedra of the
+  quarter Pier 667 at h = 1 m), times the part a symmetry-reduced model keeps;
+* unknowns: cells x :data:`VERTICES_PER_CELL` x the unknowns per vertex of the element pair
+  (:data:`UNKNOWNS_PER_VERTEX`);
+* memory per rank: ``BASE_MB + C * unknowns^ALPHA / ranks`` (MB), with ``C`` and ``ALPHA``
+  fitted (least squares in log-log) per linear-solver family to the peaks measured on 2 ranks
+  in docs/benchmarks.md (:data:`MEASURED_PEAKS`); ``auto`` is the preset it would choose
+  (:func:`~pilegroup.studies.run.pipeline.auto_preset`).
+
+Available memory: ``MemAvailable`` of ``/proc/meminfo`` (the kernel's estimate of what can be
+allocated without swapping), divided by the run's ranks on this node; the smallest value over
+the nodes decides (every rank decides alike).
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import os
+from typing import Any
+
+import numpy as np
+from mpi4py import MPI
+
+from pilegroup.errors import MachineTooSmall
+from pilegroup.geometry.adapter import ResolvedGeometry
+from pilegroup.model import Scenario
+from pilegroup.model.mesh_estimate import SAFETY, estimated_cells
+from pilegroup.studies.run.pipeline import auto_preset
+
+log = logging.getLogger(__name__)
+
+#: Peak resident memory of one rank of a tiny run (Python, DOLFINx, PETSc, gmsh loaded), MB:
+#: 602 MB measured for the 198-cell single pile of the test suite.
+BASE_MB = 600.0
+#: Vertices per hexahedron of the graded meshes (1.11 for the pier, more for small meshes).
+VERTICES_PER_CELL = 1.15
+#: Unknowns per vertex: 3 displacements (Q2: ~8 nodes per vertex) and 1 pressure.
+UNKNOWNS_PER_VERTEX = {"Q1Q1": 4, "Q2Q1": 25}
+
+#: (unknowns, peak MB of the largest of 2 ranks) per solver family, docs/benchmarks.md: the
+#: kept LU (``direct_reuse``; quarter pier 1 m and 0.1 m with block low-rank, "Block low-rank
+#: factorisations in whole runs"; full pier 1 m and 0.3 m without it, "make run with the
+#: quarter model" and "Iterative preconditioners"), the field split (``fieldsplit_pier``,
+#: quarter 1 m, full 1 m and full 0.3 m with the band of 7 layers).
+MEASURED_PEAKS: dict[str, tuple[tuple[int, float], ...]] = {
+    "lu": ((80_853, 1390.0), (164_679, 2473.0), (274_180, 7000.0), (426_116, 9800.0)),
+    "split": ((80_853, 1200.0), (301_772, 4100.0), (426_116, 6600.0)),
+}
+#: The family of each preset (``direct`` factors every matrix: the kept LU's family).
+FAMILY = {"direct": "lu", "direct_reuse": "lu", "fieldsplit_pier": "split",
+          "fieldsplit_gamg": "split"}
+
+
+def _fit(points: tuple[tuple[int, float], ...], ranks: int = 2) -> tuple[float, float]:
+    """``(C, ALPHA)`` of ``ranks x (peak - BASE_MB) = C unknowns^ALPHA`` (least squares)."""
+    n = np.log([p[0] for p in points])
+    m = np.log([ranks * (p[1] - BASE_MB) for p in points])
+    alpha, logc = np.polyfit(n, m, 1)
+    return float(math.exp(logc)), float(alpha)
+
+
+#: ``(C, ALPHA)`` per family.
+FITS = {k: _fit(v) for k, v in MEASURED_PEAKS.items()}
+
+
+def estimated_unknowns(sc: Scenario, geo: ResolvedGeometry) -> tuple[float, float]:
+    """``(cells, unknowns)`` of the model ``geo`` holds, before meshing (central estimates)."""
+    cells = estimated_cells(sc) / SAFETY * geo.kept_fraction
+    return cells, cells * VERTICES_PER_CELL * UNKNOWNS_PER_VERTEX.get(sc.numerics.element, 25)
+
+
+def estimated_peak_mb(unknowns: float, preset: str, ranks: int) -> float:
+    """Peak resident memory per rank (MB) of a run of ``unknowns`` with ``preset``."""
+    c, alpha = FITS[FAMILY.get(preset, "lu")]
+    return BASE_MB + c * unknowns ** alpha / ranks
+
+
+def available_mb_per_rank(comm: MPI.Comm) -> tuple[float, int]:
+    """``(MB available per rank, ranks on this node)``; the smallest over the nodes (collective)."""
+    node = comm.Split_type(MPI.COMM_TYPE_SHARED)
+    try:
+        local = node.size
+    finally:
+        node.Free()
+    per_rank = available_mb() / local
+    return comm.allreduce(per_rank, op=MPI.MIN), local
+
+
+def available_mb() -> float:
+    """Memory that can be allocated without swapping, MB (``MemAvailable``, else free pages)."""
+    try:
+        with open("/proc/meminfo", encoding="ascii") as f:
+            for line in f:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) / 1024.0
+    except OSError:
+        pass
+    return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_AVPHYS_PAGES") / 2 ** 20
+
+
+def memory_check(sc: Scenario, geo: ResolvedGeometry, comm: MPI.Comm, force: bool = False
+                 ) -> dict[str, Any]:
+    """Estimate, log and check the run's memory; returns the record for ``summary.json``.
+
+    Raises:
+        MachineTooSmall: the estimate per rank exceeds the memory available per rank (not
+            with ``force``, which logs a warning instead). Every rank raises alike.
+    """
+    cells, unknowns = estimated_unknowns(sc, geo)
+    preset = sc.numerics.solver.preset
+    if preset == "auto":
+        preset = auto_preset(int(unknowns))
+    need = estimated_peak_mb(unknowns, preset, comm.size)
+    avail, local = available_mb_per_rank(comm)
+    record = {"estimate_mb_per_rank": round(need, 1), "available_mb_per_rank": round(avail, 1),
+              "estimated_cells": round(cells), "estimated_unknowns": round(unknowns),
+              "preset": preset, "ranks": comm.size, "ranks_on_node": local, "forced": force}
+    text = (f"{need:.0f} MB per rank estimated (about {cells:.3g} cells, {unknowns:.3g} "
+            f"unknowns, preset {preset}, {comm.size} rank(s)); {avail:.0f} MB available per"
+            f" rank ({local} rank(s) on this node)")
+    if comm.rank == 0:
+        log.info("memory: %s", text)
+    if need > avail:
+        if not force:
+            raise MachineTooSmall("memory", f"{need:.0f} MB per rank",
+                                  f"the run does not fit: {text}; coarsen numerics.mesh, use"
+                                  " more ranks or machines, or give --force to run anyway", "")
+        if comm.rank == 0:
+            log.warning("memory: the run may not fit (--force): %s", text)
+    return record
+
+
+__all__ = ["BASE_MB", "FITS", "MEASURED_PEAKS", "available_mb", "available_mb_per_rank",
+           "estimated_peak_mb", "estimated_unknowns", "memory_check"]

@@ -1,0 +1,72 @@
+"""Machines too small: the memory estimate before meshing, checked against a measured peak, and
+a run that cannot fit refused (exit 2, one line) before gmsh starts."""
+
+import json
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+BIN = Path(sys.executable).parent
+
+#: Runs ``pilegroup run`` as a child and prints the child's peak resident memory (MB).
+MEASURE = r"""
+import resource, subprocess, sys
+r = subprocess.run(sys.argv[1:], capture_output=True, text=True)
+sys.stderr.write(r.stderr[-3000:])
+print(r.returncode, resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024.0)
+"""
+
+#: Pier 667 whole, with 1 m elements out to the block's sides: ~150 GB per rank estimated.
+TOO_LARGE = ("numerics.mesh.far_field_size_m=1.0", 'numerics.symmetry="none"')
+
+
+def test_estimate_within_a_factor_two_of_the_measured_peak(tmp_path, small_pile):
+    out = tmp_path / "run"
+    cmd = [str(BIN / "pilegroup"), "run", small_pile, "--out", str(out),
+           "--set", "outputs.xdmf=false", "--set", "outputs.plots=false"]
+    env = {**os.environ, "PILEGROUP_MESH_CACHE": str(tmp_path / "cache")}
+    r = subprocess.run([sys.executable, "-c", MEASURE, *cmd], capture_output=True, text=True,
+                       timeout=600, env=env)
+    code, peak = r.stdout.split()
+    assert code == "0", r.stderr
+    mem = json.loads((out / "summary.json").read_text())["memory"]
+    ratio = mem["estimate_mb_per_rank"] / float(peak)
+    assert 0.5 <= ratio <= 2.0, (mem, peak)
+    assert "MB per rank estimated" in r.stderr  # printed for every run
+    assert mem["peak_rss_mb_per_rank"][0] == pytest.approx(float(peak), rel=0.25)
+
+
+def test_a_run_that_cannot_fit_stops_before_meshing(tmp_path, run_cli):
+    t0 = time.perf_counter()
+    r = run_cli("pier667", tmp_path / "big", sets=TOO_LARGE)
+    wall = time.perf_counter() - t0
+    lines = [ln for ln in r.stderr.splitlines() if ln.startswith("pilegroup:")]
+    assert r.returncode == 2 and len(lines) == 1, r.stderr[-2000:]
+    assert "MB per rank estimated" in lines[0] and "MB available per rank" in lines[0]
+    assert "--force" in lines[0] and "Traceback" not in r.stderr
+    assert not (tmp_path / "big" / "mesh").exists()  # gmsh never started
+    assert wall < 60.0
+
+
+def test_force_lets_the_run_go_on(small_pile):
+    from mpi4py import MPI
+
+    from pilegroup.errors import MachineTooSmall
+    from pilegroup.geometry.adapter import resolve_geometry
+    from pilegroup.model import load_scenario
+    from pilegroup.model.loader import parse_override
+    from pilegroup.studies.run.memory_check import estimated_peak_mb, memory_check
+
+    sc = load_scenario("pier667", dict(parse_override(kv) for kv in TOO_LARGE))
+    geo = resolve_geometry(sc)
+    with pytest.raises(MachineTooSmall):
+        memory_check(sc, geo, MPI.COMM_WORLD)
+    rec = memory_check(sc, geo, MPI.COMM_WORLD, force=True)
+    assert rec["forced"] and rec["estimate_mb_per_rank"] > rec["available_mb_per_rank"]
+    # the fit goes through the measured peaks it was made from (docs/benchmarks.md)
+    assert estimated_peak_mb(80_853, "direct_reuse", 2) == pytest.approx(1390.0, rel=0.1)
+    assert estimated_peak_mb(426_116, "fieldsplit_pier", 2) == pytest.approx(6600.0, rel=0.1)
