@@ -18,14 +18,15 @@ RUN useradd --create-home --uid 1000 --shell /bin/bash pilegroup \
  && install -d -o pilegroup -g pilegroup /opt/pilegroup
 WORKDIR /opt/pilegroup
 COPY --chown=pilegroup:pilegroup . .
-# Debian's dolfinx has no dolfinx_solver module; pilegroup imports it only when present.
-RUN pip install --no-deps --no-build-isolation --break-system-packages . \
- && rm -rf build ./*.egg-info src/*.egg-info
 USER pilegroup
-# `make test` / `make run` build .venv over the system's packages (Makefile, SYSTEM_PACKAGES):
-# Debian's DOLFINx, PETSc and Open MPI, never PyPI's wheels. Open MPI may start more ranks than
-# the container has cores (the tests start up to 4; MPICH does so without asking).
+# `make test` / `make run` (and this `make bootstrap`) make .venv over the system's packages
+# (Makefile, SYSTEM_PACKAGES): Debian's DOLFINx, PETSc and Open MPI, never PyPI's wheels;
+# pilegroup in it in editable mode (the sources here are what runs and what the tests test), and
+# Open MPI's mpirun linked into its bin/, which comes first on PATH. Debian's dolfinx has no
+# dolfinx_solver module; pilegroup imports it only when present. Open MPI may start more ranks
+# than the container has cores (the tests start up to 4; MPICH does so without asking).
 ENV SYSTEM_PACKAGES=1 \
+    PATH=/opt/pilegroup/.venv/bin:/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin \
     PRTE_MCA_mapby=:oversubscribe
 RUN make bootstrap && pilegroup --help > /dev/null
 CMD ["pilegroup", "--help"]

@@ -63,6 +63,10 @@ umount_all() {
 }
 trap umount_all EXIT
 
+# Mounts left by a run that was killed (the trap did not run): undone before anything is removed.
+findmnt -rn -o TARGET | awk -v r="$root/" 'index($0, r) == 1' | sort -r \
+  | while read -r m; do umount "$m" 2>/dev/null || umount -l "$m"; done
+
 # ---- 1. the base: what FROM debian:unstable-slim gives ----------------------------------------
 base=$root/base
 if [ ! -e "$base/.complete" ]; then
@@ -203,7 +207,6 @@ fi
 # The image: an overlay over deps (a copy where overlayfs is missing), remade on every call.
 image=$root/image
 log "building $image (COPY and what follows)"
-if mountpoint -q "$image"; then umount "$image"; fi
 rm -rf "$image" "$root/image-upper" "$root/image-work"
 mkdir -p "$image" "$root/image-upper" "$root/image-work"
 if mount -t overlay overlay \

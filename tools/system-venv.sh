@@ -6,16 +6,19 @@
 # bin/, where the tests and the Makefile look for them (as in the venv of PyPI wheels).
 set -euo pipefail
 venv=${1:-.venv}
-py=$(command -v python3) || { echo "SYSTEM_PACKAGES=1 needs python3 on PATH" >&2; exit 1; }
+# The system's tools: PATH without the venv's own bin/ (the image puts it first).
+venv_bin=$(mkdir -p "$venv" && cd "$venv" && pwd)/bin
+sys_path=$(printf '%s' "$PATH" | tr ':' '\n' | grep -vxF "$venv_bin" | paste -sd: -)
+find_tool() { (PATH=$sys_path; command -v "$1") || { echo "SYSTEM_PACKAGES=1 needs $1 on PATH" >&2; exit 1; }; }
+py=$(find_tool python3)
 if ! "$py" -c 'import sys; assert sys.version_info >= (3, 12); import dolfinx, petsc4py, mpi4py' \
     2>/dev/null; then
   echo "SYSTEM_PACKAGES=1 needs the system's python3 (>= 3.12) with dolfinx, petsc4py and" \
        "mpi4py (Debian: python3-dolfinx; the packages are listed in the Dockerfile)" >&2
   exit 1
 fi
-for tool in mpirun ruff; do
-  command -v "$tool" >/dev/null || { echo "SYSTEM_PACKAGES=1 needs $tool on PATH" >&2; exit 1; }
-done
+mpirun=$(find_tool mpirun)
+ruff=$(find_tool ruff)
 if [ -e "$venv/pyvenv.cfg" ] && ! grep -q '^include-system-site-packages = true' "$venv/pyvenv.cfg"
 then
   echo "$venv holds PyPI's packages (made without SYSTEM_PACKAGES=1): run 'make clean' first" >&2
@@ -26,5 +29,5 @@ if [ ! -x "$venv/bin/python" ]; then
   "$py" -m venv --system-site-packages "$venv"
 fi
 "$venv/bin/python" -m pip install --quiet --no-deps --no-build-isolation --no-index -e .
-ln -sf "$(command -v mpirun)" "$venv/bin/mpirun"
-ln -sf "$(command -v ruff)" "$venv/bin/ruff"
+ln -sf "$mpirun" "$venv/bin/mpirun"
+ln -sf "$ruff" "$venv/bin/ruff"
