@@ -7,12 +7,15 @@ Sub-packages (data flows one way): ``model`` -> ``geometry`` -> ``solver`` (usin
 import importlib.util as _ilu
 import os as _os
 
-# Under MPI every rank is one core's worth of work: BLAS threads inside each rank (OpenBLAS
-# starts a pool at load time) would oversubscribe the cores. Measured on the Pier 667 Jacobian
-# (274,180 unknowns, MUMPS LU, 2 ranks on 2 cores): 76.5 s with the default pool, 62.8 s with
-# one thread per rank. Set before the PETSc/BLAS libraries load; an explicit value is kept.
-if int(_os.environ.get("PMI_SIZE") or _os.environ.get("OMPI_COMM_WORLD_SIZE") or 1) > 1:
-    _os.environ.setdefault("OMP_NUM_THREADS", "1")
+# One BLAS thread per process, serial or under MPI, unless OMP_NUM_THREADS (or OpenBLAS's own
+# OPENBLAS_NUM_THREADS) says otherwise; set before the PETSc/BLAS libraries load, which size
+# their thread pool then. Under MPI every rank is one core's worth of work: threads inside
+# each rank oversubscribe the cores (Pier 667 Jacobian, MUMPS LU, 2 ranks on 2 cores: 76.5 s
+# with the default pool, 62.8 s with one thread per rank). Serial, Debian's PETSc calls a
+# threaded OpenBLAS: single_pile's solves took 13-15 s with one thread against 78-105 s with
+# two on a busy two-core machine; the PyPI wheel's PETSc BLAS is single-threaded, and the
+# thread count made no difference there (docs/solver.md, "BLAS threads").
+_os.environ.setdefault("OMP_NUM_THREADS", "1")
 
 # The PyPI wheel of DOLFINx (dolfinx-solver-real) must be imported before dolfinx/petsc4py:
 # it orders mpi4py ahead of the compiled bindings. This is the only place that does it, and
