@@ -292,7 +292,8 @@ class LinearSolver:
     or ``fieldsplit_pier`` falls back to ``direct_reuse``.
     """
 
-    preset: Literal["auto", "direct", "direct_reuse", "fieldsplit_gamg", "fieldsplit_pier"] = "auto"
+    preset: Literal["auto", "direct", "direct_reuse", "fieldsplit_gamg", "fieldsplit_pier",
+                    "fieldsplit_kept"] = "auto"
     options: dict[str, str | int | float | bool] = field(default_factory=dict)
 
 

@@ -38,6 +38,7 @@ a negative reason raises :class:`LinearSolveError` (a :class:`ConvergenceError`)
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
@@ -73,6 +74,11 @@ class Preset:
             GMRES's preconditioner; refactor after a solve needing more iterations than this.
         fallback: the preset that takes over (with one warning line) when a solve with this
             one fails; ``None``: the failure is the step's.
+        keep_blocks: field-split blocks whose preconditioner (e.g. an LU factorisation) is
+            kept when the matrix changes, the other blocks being set up anew; all are set up
+            anew after a solve needing more than ``keep_its`` iterations, or a failed one
+            (which is then solved again).
+        keep_its: the iteration count that refreshes the kept blocks.
     """
 
     name: str
@@ -83,6 +89,8 @@ class Preset:
     fixed_stress: bool = False
     reuse_factor_its: int = 0
     fallback: str | None = None
+    keep_blocks: tuple[str, ...] = ()
+    keep_its: int = 0
 
 
 PRESETS: dict[str, Preset] = {
@@ -173,6 +181,8 @@ PRESETS: dict[str, Preset] = {
         fallback="direct_reuse",
     ),
 }
+PRESETS["fieldsplit_kept"] = dataclasses.replace(
+    PRESETS["fieldsplit_pier"], name="fieldsplit_kept", keep_blocks=("structure",), keep_its=60)
 
 #: ``(name, index set, near-nullspace or None)`` of every block of a field split.
 Splits = list[tuple[str, PETSc.IS, PETSc.NullSpace | None]]
@@ -290,6 +300,8 @@ class KSPSolver:
         self.ksp = create_ksp(self.comm, self.A, self._preconditioning(), self.prefix, preset,
                               overrides, splits)
         self._reusing = False
+        self._kept = False  # the blocks of keep_blocks keep their set-up at the next one
+        self._stale = False  # their set-up is older than the current matrix
         self._factor_undrained: bool | None = None  # constraints of the kept factorisation
 
     def _preconditioning(self) -> PETSc.Mat | None:
@@ -338,7 +350,38 @@ class KSPSolver:
         self.fallbacks = list(fallbacks)
         self.refactorisations = int(refactorisations)
 
+    def _keep_blocks(self, keep: bool) -> None:
+        """Whether the blocks of ``keep_blocks`` keep their preconditioner at the next set-up.
+
+        If not, the next application sets them up with the current matrix.
+        """
+        subs = self.ksp.getPC().getFieldSplitSubKSP()
+        for name, sub in zip(self.spec.splits, subs, strict=True):
+            if name in self.spec.keep_blocks:
+                sub.getPC().setReusePreconditioner(keep)
+        self._kept = keep
+
+    def _solve_keeping_blocks(self, rhs: PETSc.Vec, sol: PETSc.Vec) -> int:
+        """Solve with the kept blocks' preconditioners (refreshed after a failed solve)."""
+        if self._new_matrix and self._kept:
+            self._stale = True  # the kept set-up is older than the matrix
+        if not self._kept and (self._new_matrix or self._stale):
+            self.refactorisations += 1  # this solve sets the kept blocks up
+            self._stale = False
+        self._new_matrix = False
+        self.ksp.solve(rhs, sol)
+        if self._kept and self.ksp.getConvergedReason() < 0:
+            self._keep_blocks(False)  # stale blocks: set them up anew and solve again
+            self.refactorisations += 1
+            self._stale = False
+            self.ksp.solve(rhs, sol)
+        its = check_reason(self.ksp, "Newton correction")
+        self._keep_blocks(its <= self.spec.keep_its)
+        return its
+
     def _solve(self, rhs: PETSc.Vec, sol: PETSc.Vec, undrained: bool) -> int:
+        if self.spec.keep_blocks:
+            return self._solve_keeping_blocks(rhs, sol)
         limit = self.spec.reuse_factor_its
         if limit and self._reusing and self._factor_undrained != undrained:
             self._set_reuse(False)

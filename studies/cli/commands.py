@@ -67,7 +67,11 @@ DESCRIPTIONS = {
               "(unknowns, Newton and Krylov counts, factorisations, wall, peak memory); "
               "stability: the small scenario under extreme time steps, permeability, "
               "stiffness, loads, interface options and element pairs, each run in its own "
-              "process under a timeout (status, counts, settlement, max |p|, NaN check)."),
+              "process under a timeout (status, counts, settlement, max |p|, NaN check); "
+              "floors: the cost of each piece of a linear solve (MatMult, each block's "
+              "preconditioner, the whole split, the LU) on the scenario's first load-step "
+              "Jacobian, in process (run it under mpirun); presets: the whole job with each "
+              "preset per size and model, and the table of `auto` those runs select."),
     "report": ("Read the CSV and JSON files of a finished or interrupted run (settlement.csv, "
                "pile_profiles.csv, layer_history.csv, pile_loads.csv, load_settlement.csv, "
                "gauges.csv, summary.json), write PNG "
@@ -221,6 +225,19 @@ def _cmd_bench(args: argparse.Namespace) -> int:
         rows = bench_pier(args.scenario, args.sizes or [1.0], args.symmetry, args.ranks or 2,
                           args.out or "out/bench_pier", args.timeout, args.set or ())
         return 0 if all(r["status"] == "complete" for r in rows) else 1
+    if args.what == "presets":
+        from pilegroup.studies.bench.preset_bench import bench_presets
+
+        rows = bench_presets(args.presets, args.scenario, args.sizes or [1.0], args.symmetry,
+                             args.ranks or 2, args.out or "out/bench_presets", args.timeout,
+                             args.set or ())
+        return 0 if any(r["status"] == "complete" for r in rows) else 1
+    if args.what == "floors":
+        from pilegroup.studies.bench.solver_floors import bench_floors
+
+        bench_floors(args.scenario, args.set or (), args.out or "out/bench_floors",
+                     (args.sizes or [None])[0])
+        return 0
     if args.what == "stability":
         from pilegroup.studies.bench.stability import bench_stability
 
@@ -235,25 +252,32 @@ def _cmd_bench(args: argparse.Namespace) -> int:
 
 def _bench_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("what", choices=["constitutive", "meshing", "verification", "pier",
-                                    "stability"])
+                                    "stability", "floors", "presets"])
     p.add_argument("--sizes", type=float, nargs="*", default=None, metavar="H",
                    help="meshing: pile-surface sizes in m (default: the paper's five); "
-                   "pier: the sizes to run (default: 1.0)")
-    p.add_argument("--out", default=None, help="verification, pier, stability: output folder")
-    p.add_argument("--scenario", default="pier667", help="pier: the scenario to run")
+                   "pier, presets: the sizes to run (default: 1.0); floors: the one size "
+                   "(default: the scenario's)")
+    p.add_argument("--out", default=None,
+                   help="verification, pier, presets, floors, stability: output folder")
+    p.add_argument("--scenario", default="pier667",
+                   help="pier, presets, floors: the scenario to run (floors: under mpirun, in "
+                   "process)")
     p.add_argument("--symmetry", nargs="*", default=["auto"],
-                   help="pier, meshing: the numerics.symmetry values to run (default: auto,"
-                   " the part the geometry's symmetry allows)")
+                   help="pier, presets, meshing: the numerics.symmetry values to run (default: "
+                   "auto, the part the geometry's symmetry allows)")
     p.add_argument("--ranks", type=int, default=None,
-                   help="pier, stability: MPI ranks of each run (default: 2 for pier, 1 for "
-                   "stability)")
+                   help="pier, presets, stability: MPI ranks of each run (default: 2 for pier "
+                   "and presets, 1 for stability)")
     p.add_argument("--timeout", type=float, default=None, metavar="S",
-                   help="pier, stability: seconds each run may take before it is killed "
-                   "(default: no limit for pier, 900 for stability)")
+                   help="pier, presets, stability: seconds each run may take before it is "
+                   "killed (default: no limit for pier and presets, 900 for stability)")
+    p.add_argument("--presets", nargs="+", default=["direct_reuse", "fieldsplit_kept"],
+                   metavar="PRESET", help="presets: the linear-solver presets to compare "
+                   "(default: direct_reuse fieldsplit_kept)")
     p.add_argument("--cases", nargs="*", default=None, metavar="CASE",
                    help="stability: the cases to run (default: all)")
     p.add_argument("--set", action="append", metavar="KEY=VALUE",
-                   help="pier: a scenario key for every run, e.g. "
+                   help="pier, presets, floors: a scenario key for every run, e.g. "
                    "numerics.solver.preset=fieldsplit_pier (repeatable)")
     p.set_defaults(func=_cmd_bench)
 

@@ -16,7 +16,7 @@ The estimate (docs/benchmarks.md, "Memory estimate before meshing"):
 * memory per rank: ``BASE_MB + C * unknowns^ALPHA / ranks`` (MB), with ``C`` and ``ALPHA``
   fitted (least squares in log-log) per linear-solver family to the peaks measured on 2 ranks
   in docs/benchmarks.md (:data:`MEASURED_PEAKS`); ``auto`` is the preset it would choose
-  (:func:`~pilegroup.studies.run.pipeline.auto_preset`).
+  (:func:`~pilegroup.studies.run.auto_preset.auto_preset`).
 
 Available memory: ``MemAvailable`` of ``/proc/meminfo`` (the kernel's estimate of what can be
 allocated without swapping), divided by the run's ranks on this node; the smallest value over
@@ -37,7 +37,7 @@ from pilegroup.errors import MachineTooSmall
 from pilegroup.geometry.adapter import ResolvedGeometry
 from pilegroup.model import Scenario
 from pilegroup.model.mesh_estimate import SAFETY, estimated_cells
-from pilegroup.studies.run.pipeline import auto_preset
+from pilegroup.studies.run.auto_preset import auto_preset
 
 log = logging.getLogger(__name__)
 
@@ -121,7 +121,7 @@ def memory_check(sc: Scenario, geo: ResolvedGeometry, comm: MPI.Comm, force: boo
     cells, unknowns = estimated_unknowns(sc, geo)
     preset = sc.numerics.solver.preset
     if preset == "auto":
-        preset = auto_preset(int(unknowns))
+        preset = auto_preset(int(unknowns), geo.symmetry, sc.interface.mode != "tied")
     need = estimated_peak_mb(unknowns, preset, comm.size)
     avail, local = available_mb_per_rank(comm)
     record = {"estimate_mb_per_rank": round(need, 1), "available_mb_per_rank": round(avail, 1),

@@ -55,6 +55,7 @@ from pilegroup.solver import (
 from pilegroup.solver.probes import facet_area
 from pilegroup.studies.results.records import SOLVER_SUMMARY_JSON, RunSummary
 from pilegroup.studies.results.tables import GAUGES_CSV
+from pilegroup.studies.run.auto_preset import auto_preset
 from pilegroup.studies.run.capacity_probe import CapacityProbe
 from pilegroup.studies.run.checkpoint import Checkpoints
 from pilegroup.studies.run.gauge_probe import GaugeProbe
@@ -70,13 +71,6 @@ log = logging.getLogger(__name__)
 #: centimetres. Tied piles: < 1e-9 m.
 GEOSTATIC_TOL_M = 1e-4
 
-#: Below this many unknowns the ``auto`` preset uses one MUMPS factorisation per Newton matrix
-#: (``direct``); above, ``direct_reuse`` (one factorisation serves many solves: the quarter
-#: pier at h = 1 m, 80,853 unknowns, needs 6 factorisations for its 29 Newton iterations). Both
-#: are measured to converge on the pier system; ``fieldsplit_gamg`` is not (docs/benchmarks.md),
-#: so ``auto`` never picks it.
-DIRECT_MAX_DOFS = 50_000
-
 #: A capacity stage's steps are at most its duration over this many: the load–settlement
 #: curve, and with it the tangent stiffness of the plunging criterion, gets at least as many
 #: points (docs/model.md, "Capacity").
@@ -85,18 +79,6 @@ CAPACITY_STEPS = 50
 #: Width (m) of the soil around the pile–soil interface that ``fieldsplit_pier`` solves exactly
 #: with the structure (:func:`band_layers`).
 BAND_WIDTH_M = 2.0
-
-
-def auto_preset(dofs: int) -> str:
-    """The linear-solver preset ``auto`` stands for a system of ``dofs`` unknowns.
-
-    ``fieldsplit_pier`` is not chosen: it converges on the full Pier 667 model at h = 1 m and
-    0.3 m (at most 47 FGMRES iterations per solve at both) in about two thirds of the kept
-    LU's memory (6.6 against 9.8 GB on the largest rank at 0.3 m), but the sizes ``auto``
-    meets with the bundled scenario (the quarter model) run faster on the kept LU; selecting
-    it is the user's call for full models that the LU does not fit (docs/benchmarks.md).
-    """
-    return "direct" if dofs <= DIRECT_MAX_DOFS else "direct_reuse"
 
 
 def band_layers(h: float) -> int:
@@ -150,7 +132,8 @@ def build_problem(sc: Scenario, geo: ResolvedGeometry, md: MeshData, preset: str
     disc = Discretisation(sc.numerics.element)
     p = preset or sc.numerics.solver.preset
     if p == "auto":
-        p = auto_preset(estimate_dofs(md, sc.numerics.element))
+        p = auto_preset(estimate_dofs(md, sc.numerics.element), geo.symmetry,
+                        sc.interface.mode != "tied")
     num = sc.numerics
     newton = NewtonOptions(rtol=num.newton_rtol, atol=num.newton_atol, max_it=num.time.max_newton)
     h = geo.spec.sizing.h_pile

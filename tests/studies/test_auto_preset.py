@@ -1,0 +1,80 @@
+"""``auto``: the measured table picks the preset per model part, interface and size; the
+benchmark's results regenerate that table."""
+
+import dataclasses
+
+import pytest
+from mpi4py import MPI
+
+from pilegroup.errors import SolverInputError
+from pilegroup.geometry.adapter import geometry_spec, resolve_geometry
+from pilegroup.geometry.convert import build_mesh
+from pilegroup.model import load_scenario
+from pilegroup.solver.linsolve import PRESETS
+from pilegroup.studies.run import auto_preset as ap
+from pilegroup.studies.run import pipeline as pier
+
+
+def test_every_row_names_a_preset_and_the_table_covers_every_system():
+    assert all(r.preset in PRESETS for r in ap.AUTO_TABLE)
+    assert ap.AUTO_TABLE[0] == ap.SMALL_ROW and ap.AUTO_TABLE[-1] == ap.FALLBACK_ROW
+    for model in ("quarter", "half", "none"):
+        for itf in (True, False):
+            for dofs in (1_000, 80_853, 301_772, 10 ** 7):
+                assert ap.auto_preset(dofs, model, itf) in PRESETS
+    assert ap.auto_preset(50_000, "none") == "direct"
+    assert ap.auto_preset(80_853, "quarter") == "direct_reuse"
+
+
+def test_split_presets_only_for_piles_with_an_interface():
+    """The split presets need the piles as a body of their own: never for tied piles."""
+    for model in ("quarter", "half", "none"):
+        for dofs in (80_853, 301_772, 10 ** 7):
+            assert not ap.auto_preset(dofs, model, False).startswith("fieldsplit")
+
+
+def test_first_matching_row_wins_and_no_match_is_an_error():
+    rows = (ap.AutoRow("none", True, 100, "direct"), ap.AutoRow("none", None, None, "direct_reuse"))
+    assert ap.auto_preset(100, "none", True, rows) == "direct"
+    assert ap.auto_preset(101, "none", True, rows) == "direct_reuse"
+    with pytest.raises(SolverInputError, match="no preset in the auto table.*'quarter'"):
+        ap.auto_preset(10, "quarter", True, rows)
+
+
+def test_table_regenerated_from_benchmark_results():
+    """Per (model, interface) and size the fastest complete run wins; the largest size holds
+    for larger systems; equal neighbours merge; the printed source evaluates to the rows."""
+    res = [
+        {"symmetry": "none", "interface": True, "dofs": 301_772, "preset": "direct_reuse",
+         "status": "complete", "wall_s": 1287.0},
+        {"symmetry": "none", "interface": True, "dofs": 301_772, "preset": "fieldsplit_kept",
+         "status": "complete", "wall_s": 900.0},
+        {"symmetry": "none", "interface": True, "dofs": 426_116, "preset": "fieldsplit_kept",
+         "status": "complete", "wall_s": 2000.0},
+        {"symmetry": "none", "interface": True, "dofs": 426_116, "preset": "direct_reuse",
+         "status": "failed (timeout)", "wall_s": 100.0},
+        {"symmetry": "quarter", "interface": True, "dofs": 80_853, "preset": "direct_reuse",
+         "status": "complete", "wall_s": 85.0},
+        {"symmetry": "quarter", "interface": True, "dofs": 80_853, "preset": "fieldsplit_kept",
+         "status": "complete", "wall_s": 120.0},
+    ]
+    rows = ap.fastest_rows(res)
+    assert [(r.model, r.max_dofs, r.preset) for r in rows] == [
+        ("none", None, "fieldsplit_kept"), ("quarter", None, "direct_reuse")]
+    assert "direct_reuse 1287 s" in rows[0].measured and "failed" not in rows[0].measured
+    table = eval(ap.table_source(rows).split("=", 1)[1], vars(ap))  # noqa: S307 - our own text
+    assert table == (ap.SMALL_ROW, *rows, ap.FALLBACK_ROW)
+
+
+def test_auto_reaches_the_solver(tmp_path, monkeypatch, small_pile):
+    """The problem is built with the table's preset for its size, model and interface."""
+    monkeypatch.setenv("PILEGROUP_MESH_CACHE", str(tmp_path / "cache"))
+    monkeypatch.setattr(pier, "auto_preset", lambda dofs, model, itf: (
+        "fieldsplit_kept" if (model, itf) == ("quarter", True) and dofs > 0 else "direct"))
+    sc = load_scenario(small_pile, {"numerics.solver.preset": "auto"})
+    geo = resolve_geometry(sc)
+    pb = pier.build_problem(sc, geo, build_mesh(geometry_spec(sc), MPI.COMM_WORLD))
+    assert geo.symmetry == "quarter" and pb.linear_solver.preset == "fieldsplit_kept"
+    tied = dataclasses.replace(sc, interface=dataclasses.replace(sc.interface, mode="tied"))
+    pb = pier.build_problem(tied, geo, build_mesh(geometry_spec(tied), MPI.COMM_WORLD))
+    assert pb.linear_solver.preset == "direct"
