@@ -286,10 +286,10 @@ class TimeStepping:
 class LinearSolver:
     """PETSc linear solver: a named preset merged with user ``options``.
 
-    ``options`` are PETSc option names without the problem prefix. ``auto`` picks ``direct`` for
-    small problems and ``direct_reuse`` for larger ones (the presets measured to converge on the
-    pier system at every size; ``studies.run.pipeline.auto_preset``); a failing ``fieldsplit_gamg``
-    or ``fieldsplit_pier`` falls back to ``direct_reuse``.
+    ``options`` are PETSc option names without the problem prefix. ``auto`` takes the preset
+    measured fastest for the system's model part, interface and size
+    (``studies.run.auto_preset.AUTO_TABLE``, docs/solver.md); a failing ``fieldsplit_gamg``,
+    ``fieldsplit_pier`` or ``fieldsplit_kept`` falls back to ``direct_reuse``.
     """
 
     preset: Literal["auto", "direct", "direct_reuse", "fieldsplit_gamg", "fieldsplit_pier",

@@ -227,12 +227,13 @@ class Scenario:
     def _check_interfaces(self) -> None:
         """Every layer the piles cross has interface parameters, unless the piles are tied.
 
-        The ``fieldsplit_pier`` solver preset splits the structure from the soil and so needs
-        piles joined to the soil by the interface.
+        The ``fieldsplit_pier`` and ``fieldsplit_kept`` solver presets split the structure from
+        the soil and so need piles joined to the soil by the interface.
         """
         if self.interface.mode == "tied":
-            if self.numerics.solver.preset == "fieldsplit_pier":
-                raise ScenarioError("numerics.solver.preset", "fieldsplit_pier",
+            preset = self.numerics.solver.preset
+            if preset in ("fieldsplit_pier", "fieldsplit_kept"):
+                raise ScenarioError("numerics.solver.preset", preset,
                                     "needs interface.mode 'elastic' or 'viscoplastic' (the piles"
                                     " as a body of their own); with tied piles: 'auto', 'direct',"
                                     " 'direct_reuse' or 'fieldsplit_gamg'")

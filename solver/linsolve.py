@@ -32,6 +32,13 @@ Presets:
   aggregation cuts the AMG set-up from 12.6 s to 0.7 s. Measured on the Pier 667 system in
   docs/benchmarks.md ("Iterative preconditioners on the pier Jacobian").
 
+* ``fieldsplit_kept``: ``fieldsplit_pier`` whose structure block keeps its LU factorisation
+  across new Jacobians (``Preset.keep_blocks``): the piles and cap are linear, the band's soil
+  and the interface tangent change little, so one factorisation serves the run until a solve
+  needs more than 60 iterations; the pressure and soil blocks are set up with every matrix.
+  Full Pier 667 at h = 1 m: 2 set-ups of that block instead of 29, the run 17 % shorter, the
+  same answer (docs/benchmarks.md, "The full model: where the time goes").
+
 Every problem has its own options prefix; after each solve the converged reason is checked and
 a negative reason raises :class:`LinearSolveError` (a :class:`ConvergenceError`).
 """

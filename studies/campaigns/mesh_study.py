@@ -1,26 +1,25 @@
 """``pilegroup study mesh``: a batch over the mesh size, with the penalty check, and its report.
 
 For each size ``h`` (``numerics.mesh.size_m``) the scenario is validated and its memory is
-estimated (:func:`estimated_memory_mb`); a size that is invalid or would not fit the machine's
-memory is not run and is reported with the reason. The sizes that can run are the cases
-``h<size>`` of a batch (:func:`pilegroup.studies.batch.execute.run_batch`: MPI groups, shared queue,
-resume). The interface's normal stiffness is ``normal_stiffness_factor * E / h``
+estimated as every run estimates its own before meshing
+(:func:`pilegroup.studies.run.memory_check.run_estimate`); a size that is invalid or would not fit
+the machine's memory is not run and is reported with the reason. The sizes that can run are the
+cases ``h<size>`` of a batch (:func:`pilegroup.studies.batch.execute.run_batch`: MPI groups, shared
+queue, resume). The interface's normal stiffness is ``normal_stiffness_factor * E / h``
 (:func:`pilegroup.studies.run.pipeline.interface_law`), so it grows as the mesh is refined; the
 coarsest and the finest sizes are also run with the factor times ``penalty_factor`` (cases
-``h<size>_penalty_x<factor>``) to show whether the answer depends on it. World rank 0 then
-writes the report (:mod:`pilegroup.studies.campaigns.mesh_report`).
+``h<size>_penalty_x<factor>``) to show whether the answer depends on it. World rank 0 then writes
+the report (:mod:`pilegroup.studies.campaigns.mesh_report`).
 
-Memory estimate: the unknowns from the cell-count estimate of
-:func:`pilegroup.model.mesh_estimate.estimated_cells` (whole model, conservative; times the
-part a symmetry-reduced model keeps) and the unknowns per cell of the element pair; memory
-``ranks * BASE_MB + C * unknowns^ALPHA``, with ``C`` and ``ALPHA`` through the two pier runs of
-docs/benchmarks.md (:data:`MEMORY_POINTS`). Cases run side by side share the machine, so a case
-may use the machine's memory divided by the number of groups.
+Memory estimate: the one each run makes of itself before meshing (cells and unknowns of the
+model part, the preset it will use, that preset family's fit of measured peaks;
+docs/benchmarks.md, "Memory estimate before meshing"), times the ranks of a case. Cases run side
+by side share the machine, so a case may use the machine's memory divided by the number of
+groups.
 """
 
 from __future__ import annotations
 
-import math
 import os
 from collections.abc import Mapping, Sequence
 from pathlib import Path
@@ -31,50 +30,22 @@ from mpi4py import MPI
 from pilegroup.errors import ScenarioError
 from pilegroup.geometry.adapter import resolve_geometry
 from pilegroup.model import Scenario, load_scenario
-from pilegroup.model.mesh_estimate import estimated_cells
 from pilegroup.studies.batch.batch_plan import BatchCase, BatchPlan
 from pilegroup.studies.batch.execute import run_batch
 from pilegroup.studies.batch.rows import BatchRow
 from pilegroup.studies.campaigns.mesh_records import SizeCheck, StudyCase, StudyInfo
 from pilegroup.studies.campaigns.mesh_report import write_mesh_report
 from pilegroup.studies.report.paper_values import PAPER_HOURS
+from pilegroup.studies.run.memory_check import run_estimate
 
 SIZE_KEY = "numerics.mesh.size_m"
 PENALTY_KEY = "interface.normal_stiffness_factor"
 #: The paper's five mesh sizes (m), the default of the study.
 PAPER_SIZES = tuple(sorted(PAPER_HOURS, reverse=True))
 
-#: Peak resident memory of one rank of a tiny run (Python, DOLFINx, PETSc loaded), MB: 602 MB
-#: measured for the 198-cell single pile of the test suite.
-BASE_MB = 600.0
-#: (unknowns, MB over both ranks above the base) of two runs on 2 ranks, docs/benchmarks.md
-#: "make run with the quarter model": quarter pier 80,853 unknowns at 1.5 GB per rank, full
-#: pier 274,180 unknowns at 7.0 GB per rank (the larger of the two measurements).
-MEMORY_POINTS = ((80_853, 2 * 1500.0 - 2 * BASE_MB), (274_180, 2 * 7000.0 - 2 * BASE_MB))
-ALPHA = math.log(MEMORY_POINTS[1][1] / MEMORY_POINTS[0][1]) / math.log(
-    MEMORY_POINTS[1][0] / MEMORY_POINTS[0][0])
-C_MB = MEMORY_POINTS[1][1] / MEMORY_POINTS[1][0] ** ALPHA
-#: Vertices per hexahedron of the graded meshes (1.11 for the pier, more for tiny meshes).
-VERTICES_PER_CELL = 1.15
-#: Unknowns per vertex: 3 displacements (Q2: ~8 nodes per vertex) + 1 pressure.
-UNKNOWNS_PER_VERTEX = {"Q1Q1": 4, "Q2Q1": 25}
-
-
 def machine_memory_mb() -> float:
     """Physical memory of this machine, MB."""
     return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES") / 2 ** 20
-
-
-def estimated_unknowns(sc: Scenario) -> float:
-    """Unknowns of ``sc``'s model from the (conservative) cell-count estimate."""
-    kept = resolve_geometry(sc).kept_fraction
-    per_vertex = UNKNOWNS_PER_VERTEX.get(sc.numerics.element, 25)
-    return estimated_cells(sc) * kept * VERTICES_PER_CELL * per_vertex
-
-
-def estimated_memory_mb(unknowns: float, ranks: int) -> float:
-    """Peak memory of a run over all its ranks, MB (fit of :data:`MEMORY_POINTS`)."""
-    return ranks * BASE_MB + C_MB * unknowns ** ALPHA
 
 
 def check_size(source: str, sets: Mapping[str, Any], h: float, ranks: int, groups: int,
@@ -84,14 +55,14 @@ def check_size(source: str, sets: Mapping[str, Any], h: float, ranks: int, group
         sc = load_scenario(source, {**sets, SIZE_KEY: h})
     except ScenarioError as exc:
         return SizeCheck(h, False, f"invalid: {exc}")
-    n = estimated_unknowns(sc)
-    mem = estimated_memory_mb(n, ranks)
+    cells, n, _, per_rank = run_estimate(sc, resolve_geometry(sc), ranks)
+    mem = per_rank * ranks
     budget = memory_mb / groups
     ok = mem <= budget
     reason = "" if ok else (
         f"needs about {mem / 1024:.1f} GB ({n:,.0f} unknowns estimated) > {budget / 1024:.1f} "
         f"GB per case ({memory_mb / 1024:.1f} GB of memory / {groups} cases at once)")
-    return SizeCheck(h, ok, reason, estimated_cells(sc), n, mem)
+    return SizeCheck(h, ok, reason, cells, n, mem)
 
 
 def study_cases(sc: Scenario, checks: Sequence[SizeCheck], penalty_factor: float
@@ -146,5 +117,5 @@ def run_mesh_study(source: str, sets: Mapping[str, Any], sizes: Sequence[float],
 
 
 __all__ = ["PAPER_SIZES", "SizeCheck", "StudyCase", "StudyInfo", "check_size",
-           "estimated_memory_mb", "estimated_unknowns", "machine_memory_mb", "run_mesh_study",
+           "machine_memory_mb", "run_mesh_study",
            "study_cases", "study_plan"]

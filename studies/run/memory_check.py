@@ -60,7 +60,7 @@ MEASURED_PEAKS: dict[str, tuple[tuple[int, float], ...]] = {
 }
 #: The family of each preset (``direct`` factors every matrix: the kept LU's family).
 FAMILY = {"direct": "lu", "direct_reuse": "lu", "fieldsplit_pier": "split",
-          "fieldsplit_gamg": "split"}
+          "fieldsplit_kept": "split", "fieldsplit_gamg": "split"}
 
 
 def _fit(points: tuple[tuple[int, float], ...], ranks: int = 2) -> tuple[float, float]:
@@ -85,6 +85,20 @@ def estimated_peak_mb(unknowns: float, preset: str, ranks: int) -> float:
     """Peak resident memory per rank (MB) of a run of ``unknowns`` with ``preset``."""
     c, alpha = FITS[FAMILY.get(preset, "lu")]
     return BASE_MB + c * unknowns ** alpha / ranks
+
+
+def run_estimate(sc: Scenario, geo: ResolvedGeometry, ranks: int
+                 ) -> tuple[float, float, str, float]:
+    """``(cells, unknowns, preset, peak MB per rank)`` of a run of ``sc`` on ``ranks`` ranks.
+
+    Before meshing: the central cell and unknown estimates of the model ``geo`` holds, the
+    preset the run will use (``auto`` resolved by its table) and that preset family's fit.
+    """
+    cells, unknowns = estimated_unknowns(sc, geo)
+    preset = sc.numerics.solver.preset
+    if preset == "auto":
+        preset = auto_preset(int(unknowns), geo.symmetry, sc.interface.mode != "tied")
+    return cells, unknowns, preset, estimated_peak_mb(unknowns, preset, ranks)
 
 
 def available_mb_per_rank(comm: MPI.Comm) -> tuple[float, int]:
@@ -118,11 +132,7 @@ def memory_check(sc: Scenario, geo: ResolvedGeometry, comm: MPI.Comm, force: boo
         MachineTooSmall: the estimate per rank exceeds the memory available per rank (not
             with ``force``, which logs a warning instead). Every rank raises alike.
     """
-    cells, unknowns = estimated_unknowns(sc, geo)
-    preset = sc.numerics.solver.preset
-    if preset == "auto":
-        preset = auto_preset(int(unknowns), geo.symmetry, sc.interface.mode != "tied")
-    need = estimated_peak_mb(unknowns, preset, comm.size)
+    cells, unknowns, preset, need = run_estimate(sc, geo, comm.size)
     avail, local = available_mb_per_rank(comm)
     record = {"estimate_mb_per_rank": round(need, 1), "available_mb_per_rank": round(avail, 1),
               "estimated_cells": round(cells), "estimated_unknowns": round(unknowns),

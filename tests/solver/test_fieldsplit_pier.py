@@ -169,10 +169,10 @@ def test_a_failing_solve_falls_back_to_direct_reuse(small, caplog):
     assert w == pytest.approx(w_ref, rel=1e-6)
 
 
-def test_tied_piles_reject_the_preset(small_pile):
-    with pytest.raises(ScenarioError, match="numerics.solver.preset.*interface.mode"):
-        load_scenario(small_pile, {"numerics.solver.preset": "fieldsplit_pier",
-                                   "interface.mode": "tied"})
+@pytest.mark.parametrize("preset", ["fieldsplit_pier", "fieldsplit_kept"])
+def test_tied_piles_reject_the_preset(small_pile, preset):
+    with pytest.raises(ScenarioError, match=f"numerics.solver.preset = '{preset}'.*interface.mode"):
+        load_scenario(small_pile, {"numerics.solver.preset": preset, "interface.mode": "tied"})
 
 
 @pytest.mark.mpi

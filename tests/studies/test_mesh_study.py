@@ -8,17 +8,18 @@ from pathlib import Path
 
 import pytest
 
+from pilegroup.geometry.adapter import resolve_geometry
 from pilegroup.model import load_scenario
 from pilegroup.studies.campaigns.gci import gci
 from pilegroup.studies.campaigns.mesh_study import (
     PENALTY_KEY,
     SizeCheck,
     check_size,
-    estimated_memory_mb,
     study_cases,
     study_plan,
 )
 from pilegroup.studies.report.paper_values import PAPER_ELEMENTS, PAPER_HOURS, PAPER_SETTLEMENT_CM
+from pilegroup.studies.run.memory_check import estimated_peak_mb, run_estimate
 
 BIN = Path(sys.executable).parent
 
@@ -31,7 +32,10 @@ def _csv(path):
 def test_a_size_that_does_not_fit_is_reported_with_the_reason(small_pile):
     ok = check_size(small_pile, {}, 0.6, ranks=1, groups=1, memory_mb=1e6)
     assert ok.runnable and ok.reason == "" and ok.estimated_unknowns > 0
-    assert ok.estimated_memory_mb == pytest.approx(estimated_memory_mb(ok.estimated_unknowns, 1))
+    sc = load_scenario(small_pile, {"numerics.mesh.size_m": 0.6})
+    _, unknowns, _, per_rank = run_estimate(sc, resolve_geometry(sc), 1)
+    assert ok.estimated_unknowns == pytest.approx(unknowns)
+    assert ok.estimated_memory_mb == pytest.approx(per_rank)  # one rank: the run's own estimate
     low = check_size(small_pile, {}, 0.6, ranks=1, groups=2, memory_mb=1000.0)
     assert not low.runnable and "GB per case (1.0 GB of memory / 2 cases at once)" in low.reason
     bad = check_size(small_pile, {}, 9.0, ranks=1, groups=1, memory_mb=1e6)
@@ -39,7 +43,11 @@ def test_a_size_that_does_not_fit_is_reported_with_the_reason(small_pile):
 
 
 def test_memory_grows_with_the_unknowns():
-    assert estimated_memory_mb(2e5, 2) > estimated_memory_mb(1e5, 2) > estimated_memory_mb(1e5, 1)
+    """Per case (all its ranks): more unknowns, more memory; more ranks, more in all."""
+    def case_mb(n, ranks):
+        return ranks * estimated_peak_mb(n, "direct_reuse", ranks)
+
+    assert case_mb(2e5, 2) > case_mb(1e5, 2) > case_mb(1e5, 1)
 
 
 def test_penalty_cases_at_the_coarsest_and_finest_size(small_pile):
