@@ -50,6 +50,7 @@ def _row(h: float, symmetry: str, out: Path, fin: Finished) -> dict[str, Any]:
             "symmetry": (sol.get("symmetry") or {}).get("model", symmetry),
             "cells": s["mesh"]["cells"],
             "dofs": sol["dofs"], "preset": sol["linear_solver"],
+            "interface_mode": sol.get("interface_mode"),
             "newton": sol["newton_iterations"], "krylov": sol["ksp_iterations"],
             "krylov_max": sol.get("ksp_iterations_max_per_solve"),
             "factorisations": sol["lu_factorisations"],

@@ -32,8 +32,6 @@ def bench_presets(presets: Sequence[str], scenario: str = "pier667",
                   ) -> list[dict[str, Any]]:
     """Run the job with every preset; print and write the runs and the regenerated table."""
     out = Path(out_dir)
-    tied = any(kv.replace(" ", "") in ("interface.mode=tied", "interface.mode='tied'")
-               for kv in sets)
     rows: list[dict[str, Any]] = []
     for preset in presets:
         runs = bench_pier(scenario, sizes, symmetries, ranks, out / preset, timeout,
@@ -41,7 +39,9 @@ def bench_presets(presets: Sequence[str], scenario: str = "pier667",
         for r in runs:
             at_end = r.pop("preset", None)
             complete = r["status"] == "complete" and at_end == preset
-            rows.append({"preset": preset, "interface": not tied, "preset_at_end": at_end,
+            itf = r.pop("interface_mode", None)
+            rows.append({"preset": preset, "interface": None if itf is None else itf != "tied",
+                         "preset_at_end": at_end,
                          **r, "status": r["status"] if complete or at_end is None
                          else f"handed over to {at_end}"})
     write_table(out, "bench_presets", rows, PRESET_COLUMNS,

@@ -31,7 +31,7 @@ from typing import Any
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from pilegroup.solver.linsolve import merged_options
+from pilegroup.solver.linsolve import create_ksp, merged_options
 from pilegroup.studies.bench.benchrun import write_table
 
 COLUMNS = ("piece", "rows", "nonzeros", "set_up_s", "apply_s", "iterations")
@@ -140,13 +140,7 @@ def measure_floors(pb: Any, repeats: int = 5, with_lu: bool = True) -> list[dict
 def _lu_row(comm: MPI.Comm, A: PETSc.Mat, x: PETSc.Vec, y: PETSc.Vec,
             repeats: int) -> dict[str, Any]:
     """One factorisation of ``A`` with the options of ``direct_reuse`` and one solve with it."""
-    db = PETSc.Options()
-    for k, v in merged_options("direct_reuse").items():
-        db[f"floor_lu_{k}"] = v
-    ksp = PETSc.KSP().create(comm)
-    ksp.setOptionsPrefix("floor_lu_")
-    ksp.setOperators(A)
-    ksp.setFromOptions()
+    ksp = create_ksp(comm, A, None, "floor_lu_", "direct_reuse")
     pc = ksp.getPC()
     set_up = _timed(comm, pc.setUp)
     apply = _timed(comm, lambda: pc.apply(x, y), repeats)

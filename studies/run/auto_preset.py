@@ -20,6 +20,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from pilegroup.errors import SolverInputError
+from pilegroup.model import Scenario
 
 
 @dataclass(frozen=True)
@@ -80,6 +81,18 @@ def auto_preset(dofs: int, model: str = "*", interface: bool = True,
             return row.preset
     raise SolverInputError(f"no preset in the auto table for {dofs} unknowns, model {model!r},"
                            f" interface {interface}")
+
+
+def scenario_preset(sc: Scenario, model: str, dofs: int, asked: str | None = None) -> str:
+    """The preset a run of ``sc`` uses: ``asked`` (or the scenario's), ``auto`` resolved.
+
+    ``model``: the model part the run holds (``ResolvedGeometry.symmetry``); ``dofs``: its
+    unknowns (counted on the mesh, or estimated before meshing).
+    """
+    preset = asked or sc.numerics.solver.preset
+    if preset != "auto":
+        return preset
+    return auto_preset(dofs, model, sc.interface.mode != "tied")
 
 
 def fastest_rows(results: Iterable[Mapping[str, Any]]) -> list[AutoRow]:

@@ -37,7 +37,7 @@ from pilegroup.errors import MachineTooSmall
 from pilegroup.geometry.adapter import ResolvedGeometry
 from pilegroup.model import Scenario
 from pilegroup.model.mesh_estimate import SAFETY, estimated_cells
-from pilegroup.studies.run.auto_preset import auto_preset
+from pilegroup.studies.run.auto_preset import scenario_preset
 
 log = logging.getLogger(__name__)
 
@@ -95,9 +95,7 @@ def run_estimate(sc: Scenario, geo: ResolvedGeometry, ranks: int
     preset the run will use (``auto`` resolved by its table) and that preset family's fit.
     """
     cells, unknowns = estimated_unknowns(sc, geo)
-    preset = sc.numerics.solver.preset
-    if preset == "auto":
-        preset = auto_preset(int(unknowns), geo.symmetry, sc.interface.mode != "tied")
+    preset = scenario_preset(sc, geo.symmetry, int(unknowns))
     return cells, unknowns, preset, estimated_peak_mb(unknowns, preset, ranks)
 
 

@@ -55,7 +55,7 @@ from pilegroup.solver import (
 from pilegroup.solver.probes import facet_area
 from pilegroup.studies.results.records import SOLVER_SUMMARY_JSON, RunSummary
 from pilegroup.studies.results.tables import GAUGES_CSV
-from pilegroup.studies.run.auto_preset import auto_preset
+from pilegroup.studies.run.auto_preset import scenario_preset
 from pilegroup.studies.run.capacity_probe import CapacityProbe
 from pilegroup.studies.run.checkpoint import Checkpoints
 from pilegroup.studies.run.gauge_probe import GaugeProbe
@@ -130,10 +130,7 @@ def build_problem(sc: Scenario, geo: ResolvedGeometry, md: MeshData, preset: str
     loads = [SurfaceLoad(f, sc.total_cap_load() / full_load_area(sc, geo, md))
              for f in names] + surcharge_loads(sc)
     disc = Discretisation(sc.numerics.element)
-    p = preset or sc.numerics.solver.preset
-    if p == "auto":
-        p = auto_preset(estimate_dofs(md, sc.numerics.element), geo.symmetry,
-                        sc.interface.mode != "tied")
+    p = scenario_preset(sc, geo.symmetry, estimate_dofs(md, sc.numerics.element), preset)
     num = sc.numerics
     newton = NewtonOptions(rtol=num.newton_rtol, atol=num.newton_atol, max_it=num.time.max_newton)
     h = geo.spec.sizing.h_pile

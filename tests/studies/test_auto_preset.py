@@ -44,20 +44,15 @@ def test_first_matching_row_wins_and_no_match_is_an_error():
 def test_table_regenerated_from_benchmark_results():
     """Per (model, interface) and size the fastest complete run wins; the largest size holds
     for larger systems; equal neighbours merge; the printed source evaluates to the rows."""
-    res = [
-        {"symmetry": "none", "interface": True, "dofs": 301_772, "preset": "direct_reuse",
-         "status": "complete", "wall_s": 1287.0},
-        {"symmetry": "none", "interface": True, "dofs": 301_772, "preset": "fieldsplit_kept",
-         "status": "complete", "wall_s": 900.0},
-        {"symmetry": "none", "interface": True, "dofs": 426_116, "preset": "fieldsplit_kept",
-         "status": "complete", "wall_s": 2000.0},
-        {"symmetry": "none", "interface": True, "dofs": 426_116, "preset": "direct_reuse",
-         "status": "failed (timeout)", "wall_s": 100.0},
-        {"symmetry": "quarter", "interface": True, "dofs": 80_853, "preset": "direct_reuse",
-         "status": "complete", "wall_s": 85.0},
-        {"symmetry": "quarter", "interface": True, "dofs": 80_853, "preset": "fieldsplit_kept",
-         "status": "complete", "wall_s": 120.0},
-    ]
+    res = [{"symmetry": model, "interface": True, "dofs": dofs, "preset": preset,
+            "status": status, "wall_s": wall}
+           for model, dofs, preset, status, wall in (
+               ("none", 301_772, "direct_reuse", "complete", 1287.0),
+               ("none", 301_772, "fieldsplit_kept", "complete", 900.0),
+               ("none", 426_116, "fieldsplit_kept", "complete", 2000.0),
+               ("none", 426_116, "direct_reuse", "failed (timeout)", 100.0),
+               ("quarter", 80_853, "direct_reuse", "complete", 85.0),
+               ("quarter", 80_853, "fieldsplit_kept", "complete", 120.0))]
     rows = ap.fastest_rows(res)
     assert [(r.model, r.max_dofs, r.preset) for r in rows] == [
         ("none", None, "fieldsplit_kept"), ("quarter", None, "direct_reuse")]
@@ -69,7 +64,7 @@ def test_table_regenerated_from_benchmark_results():
 def test_auto_reaches_the_solver(tmp_path, monkeypatch, small_pile):
     """The problem is built with the table's preset for its size, model and interface."""
     monkeypatch.setenv("PILEGROUP_MESH_CACHE", str(tmp_path / "cache"))
-    monkeypatch.setattr(pier, "auto_preset", lambda dofs, model, itf: (
+    monkeypatch.setattr(ap, "auto_preset", lambda dofs, model, itf: (
         "fieldsplit_kept" if (model, itf) == ("quarter", True) and dofs > 0 else "direct"))
     sc = load_scenario(small_pile, {"numerics.solver.preset": "auto"})
     geo = resolve_geometry(sc)
