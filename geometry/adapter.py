@@ -1,10 +1,9 @@
 """Scenario -> :class:`~pilegroup.geometry.spec.GeometrySpec` (the one place that maps them).
 
-``numerics.symmetry`` is resolved here. A scenario's loads are always uniform (a pressure on the
-cap top, or on the pile heads without a cap), its layers horizontal and its block centred with
-the same supports on opposite sides, so the model is mirror-symmetric about a plane exactly
-when its pile layout and cap are (:func:`GeometrySpec.symmetry_planes
-<pilegroup.geometry.spec.GeometrySpec.symmetry_planes>`).
+``numerics.symmetry`` is resolved here. A scenario's layers are horizontal and its block is
+centred with the same supports on opposite sides, so the model is mirror-symmetric about a
+plane exactly when its pile layout, cap and loads are (:func:`GeometrySpec.symmetry_planes
+<pilegroup.geometry.spec.GeometrySpec.symmetry_planes>` and :func:`_load_asymmetry`).
 """
 
 from __future__ import annotations
@@ -15,6 +14,7 @@ from pilegroup.errors import ScenarioError
 from pilegroup.geometry import spec
 from pilegroup.geometry import symmetry as sym
 from pilegroup.model import Scenario
+from pilegroup.model.actions import ANTISYMMETRIC, COMPONENTS
 
 
 def _full_spec(sc: Scenario, mesh_size: float | None) -> spec.GeometrySpec:
@@ -49,9 +49,17 @@ def _full_spec(sc: Scenario, mesh_size: float | None) -> spec.GeometrySpec:
 def _load_asymmetry(sc: Scenario, axis: str) -> str | None:
     """Why the scenario's loads are not mirror-symmetric about ``axis`` = 0; ``None`` if they are.
 
-    The cap load is uniform on the cap top or the pile heads (symmetric with the geometry); a
+    The vertical cap load is uniform on the cap top or the pile heads (symmetric with the
+    geometry); a horizontal force normal to the plane and a moment about an axis in it are not
+    (:data:`~pilegroup.model.actions.ANTISYMMETRIC`): a force along x keeps the plane y = 0. A
     surcharge is symmetric when its rectangle is centred on the plane (the whole surface is).
     """
+    for i, a in sc.cap_actions():
+        for k in ANTISYMMETRIC[axis]:
+            if abs(a[k]) > 0.0:
+                unit = "kN" if k < 3 else "kN m"
+                return (f"load stage {sc.stages[i].name!r} has {COMPONENTS[k]} = {a[k]:g} {unit}"
+                        " about the cap centre")
     for st in sc.stages:
         if st.kind == "surcharge" and st.area_m is not None:
             lo, hi = st.area_m[:2] if axis == "x" else st.area_m[2:]

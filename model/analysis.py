@@ -58,7 +58,8 @@ class InterfaceOptions:
 #: The keys each stage kind takes (required first, then optional), beside ``name`` and ``kind``.
 STAGE_KEYS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
     "geostatic": ((), ()),
-    "load": (("cap_load_kN", "duration_day"), ()),
+    "load": (("duration_day",), ("cap_load_kN", "Fz_kN", "Fx_kN", "Fy_kN", "Mx_kNm", "My_kNm",
+                                 "Mz_kNm")),
     "consolidation": ((), ("until_day",)),
     "surcharge": (("surcharge_kPa", "duration_day"), ("area_m",)),
     "groundwater": (("drawdown_m", "duration_day"), ()),
@@ -68,7 +69,11 @@ STAGE_KEYS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
 }
 _STAGE_UNITS = {"cap_load_kN": "kN", "duration_day": "day", "until_day": "day",
                 "surcharge_kPa": "kPa", "area_m": "m", "drawdown_m": "m", "max_load_kN": "kN",
-                "plunging_stiffness_ratio": "-", "single_pile_capacity_kN": "kN"}
+                "plunging_stiffness_ratio": "-", "single_pile_capacity_kN": "kN",
+                "Fx_kN": "kN", "Fy_kN": "kN", "Fz_kN": "kN", "Mx_kNm": "kN m", "My_kNm": "kN m",
+                "Mz_kNm": "kN m"}
+#: The six cap actions of a load stage, in the order of the components (Fx, Fy, Fz, Mx, My, Mz).
+ACTION_KEYS = ("Fx_kN", "Fy_kN", "Fz_kN", "Mx_kNm", "My_kNm", "Mz_kNm")
 
 #: Default of ``plunging_stiffness_ratio``: the foundation plunges once its tangent stiffness
 #: falls below 2 % of its initial one (docs/model.md, "Capacity").
@@ -79,8 +84,12 @@ PLUNGING_STIFFNESS_RATIO = 0.02
 class Stage:
     """One analysis stage.
 
-    ``kind``: ``geostatic`` (in-situ stresses, no time), ``load`` (ramps the cap load to
-    ``cap_load_kN`` over ``duration_day``, drained top, consolidating meanwhile), ``consolidation``
+    ``kind``: ``geostatic`` (in-situ stresses, no time), ``load`` (ramps the cap actions to their
+    values at the stage end over ``duration_day``, drained top, consolidating meanwhile: the
+    vertical load ``cap_load_kN`` (down) or ``Fz_kN`` (z up), and optionally ``Fx_kN``,
+    ``Fy_kN``, ``Mx_kNm``, ``My_kNm``, ``Mz_kNm`` in global axes about the scenario's action
+    point, docs/model.md, "Cap actions"; a component a stage omits keeps its value),
+    ``consolidation``
     (every action held until ``until_day``, or until ``time.end_day`` when omitted),
     ``surcharge`` (a pressure ``surcharge_kPa`` placed on the ground surface over
     ``duration_day``: a fill or an embankment, over the whole surface or the rectangle
@@ -98,7 +107,19 @@ class Stage:
     kind: Literal["geostatic", "load", "consolidation", "surcharge", "groundwater",
                   "installation", "capacity"]
     cap_load_kN: float | None = None
-    """Load stage: the vertical cap load at the stage end, kN."""
+    """Load stage: the vertical cap load at the stage end, kN, downward positive."""
+    Fz_kN: float | None = None
+    """Load stage: the vertical cap action at the stage end, kN, z up (``-cap_load_kN``)."""
+    Fx_kN: float | None = None
+    """Load stage: horizontal cap force along x at the stage end, kN."""
+    Fy_kN: float | None = None
+    """Load stage: horizontal cap force along y at the stage end, kN."""
+    Mx_kNm: float | None = None
+    """Load stage: cap moment about the x axis at the stage end (right-hand rule), kN m."""
+    My_kNm: float | None = None
+    """Load stage: cap moment about the y axis at the stage end, kN m."""
+    Mz_kNm: float | None = None
+    """Load stage: cap torque about the z axis at the stage end, kN m."""
     duration_day: float | None = None
     """Load, surcharge and groundwater stages: the time over which the action is ramped, day."""
     until_day: float | None = None
@@ -134,6 +155,7 @@ class Stage:
         if self.cap_load_kN is not None:
             require_non_negative("cap_load_kN", self.cap_load_kN, "kN")
             check_bound("stages.cap_load_kN", self.cap_load_kN)
+        self._check_actions()
         for key in ("max_load_kN", "single_pile_capacity_kN"):
             if getattr(self, key) is not None:
                 require_positive(key, getattr(self, key), "kN")
@@ -160,6 +182,32 @@ class Stage:
                 raise ScenarioError("area_m", list(self.area_m),
                                     "must be [x_min, x_max, y_min, y_max] with x_min < x_max and"
                                     " y_min < y_max", "m")
+
+
+    def _check_actions(self) -> None:
+        """A load stage gives its vertical load once; every action is a finite number in range."""
+        if self.kind == "load" and (self.cap_load_kN is None) == (self.Fz_kN is None):
+            given = self.cap_load_kN if self.cap_load_kN is not None else self.Fz_kN
+            raise ScenarioError("cap_load_kN", given, "give the vertical load of a load stage "
+                                "once: cap_load_kN (downward) or Fz_kN (z up), not "
+                                + ("both" if given is not None else "neither"), "kN")
+        for key in ACTION_KEYS:
+            value = getattr(self, key)
+            if value is None:
+                continue
+            require_finite(key, value, _STAGE_UNITS[key])
+            check_bound("stages.force_kN" if key.endswith("_kN") else "stages.moment_kNm",
+                        value, key)
+        if self.Fz_kN is not None and self.Fz_kN > 0.0:
+            raise ScenarioError("Fz_kN", self.Fz_kN, "must be <= 0 (z is up: a downward load is"
+                                " negative; uplift of the foundation is not modelled)", "kN")
+
+    @property
+    def vertical_kN(self) -> float | None:
+        """Load stage: the vertical load at its end, kN, downward positive (else ``None``)."""
+        if self.cap_load_kN is not None:
+            return self.cap_load_kN
+        return None if self.Fz_kN is None else -self.Fz_kN
 
 
 @dataclass(frozen=True)

@@ -86,6 +86,11 @@ BOUNDS: dict[str, Bound] = {
     "stages.cap_load_kN": Bound(0.0, 1.0e9, "kN",
                                 "the largest foundations carry ~1e6 kN; 1e9 is a typo guard",
                                 hi_open=True),
+    "stages.force_kN": Bound(-1.0e9, 1.0e9, "kN", "horizontal and vertical cap forces; the"
+                             " largest foundations carry ~1e6 kN; 1e9 is a typo guard",
+                             lo_open=True, hi_open=True),
+    "stages.moment_kNm": Bound(-1.0e10, 1.0e10, "kN m", "cap moments: ~1e6 kN x ~10 m levers;"
+                               " 1e10 is a typo guard", lo_open=True, hi_open=True),
     "stages.surcharge_kPa": Bound(-1000.0, 1000.0, "kPa",
                                   "fills and embankments up to ~50 m high (~1000 kPa); negative:"
                                   " a fill removed"),

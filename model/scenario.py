@@ -11,8 +11,19 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+import numpy as np
+
 from pilegroup.errors import ScenarioError
-from pilegroup.model.analysis import InterfaceOptions, Numerics, Outputs, Soil, Stage, Time
+from pilegroup.model.actions import Actions, held_actions, transfer
+from pilegroup.model.analysis import (
+    ACTION_KEYS,
+    InterfaceOptions,
+    Numerics,
+    Outputs,
+    Soil,
+    Stage,
+    Time,
+)
 from pilegroup.model.mesh_estimate import MAX_CELLS, estimated_cells
 from pilegroup.model.site import Cap, Layer, Piles, Site, Structure
 from pilegroup.model.units import GAMMA_WATER
@@ -34,6 +45,7 @@ class Scenario:
     interface: InterfaceOptions = field(default_factory=InterfaceOptions)
     numerics: Numerics = field(default_factory=Numerics)
     outputs: Outputs = field(default_factory=Outputs)
+    actions: Actions = field(default_factory=Actions)
     description: str = ""
 
     def __post_init__(self) -> None:
@@ -46,6 +58,7 @@ class Scenario:
         self._check_interfaces()
         self._check_gauges()
         self._check_numerics()
+        self._check_actions()
 
     # ---- rules across the parts, in the order the messages report them ----
     def _check_layer_stack(self) -> None:
@@ -195,7 +208,7 @@ class Scenario:
                                 f"must be the last stage (stages[{i + 1}] follows it): the"
                                 " foundation has failed at its end")
         st = self.stages[i]
-        before = [s.cap_load_kN for s in self.stages[:i] if s.kind == "load"]
+        before = [s.vertical_kN for s in self.stages[:i] if s.kind == "load"]
         if before and st.max_load_kN <= before[-1]:  # type: ignore[operator]
             raise ScenarioError(f"stages[{i}].max_load_kN", st.max_load_kN,
                                 f"must be > the cap load before it ({before[-1]:g} kN)", "kN")
@@ -315,9 +328,59 @@ class Scenario:
 
         Load factor 1 stands for this load.
         """
-        loads = [st.max_load_kN if st.kind == "capacity" else st.cap_load_kN
+        loads = [st.max_load_kN if st.kind == "capacity" else st.vertical_kN
                  for st in self.stages if st.kind in ("load", "capacity")]
         return float(loads[-1]) if loads else 0.0  # type: ignore[arg-type]
+
+    def load_centre(self) -> tuple[float, float, float]:
+        """Centroid of the loaded face (m): the cap's top face, or the pile heads' centroid."""
+        if self.cap is not None:
+            return (0.0, 0.0, self.cap.thickness_m)
+        x, y = np.mean(np.array(self.piles.xy, dtype=float), axis=0)
+        return (float(x), float(y), 0.0)
+
+    def action_point(self) -> tuple[float, float, float]:
+        """The point the stages' moments are given about (m): ``actions.point_m`` or the centre."""
+        p = self.actions.point_m
+        return self.load_centre() if p is None else (float(p[0]), float(p[1]), float(p[2]))
+
+    def cap_actions(self) -> list[tuple[int, np.ndarray]]:
+        """(stage index, the six actions about :meth:`load_centre` at its end) per load stage.
+
+        Actions in kN and kN m, z up (``Fz = -cap_load_kN``); components a stage omits are
+        held from the stage before (pilegroup.model.actions).
+        """
+        idx = [i for i, st in enumerate(self.stages) if st.kind == "load"]
+        given = [[None if k == "Fz_kN" and self.stages[i].vertical_kN is None else
+                  (-self.stages[i].vertical_kN if k == "Fz_kN" else  # type: ignore[operator]
+                   getattr(self.stages[i], k)) for k in ACTION_KEYS] for i in idx]
+        P, C = self.action_point(), self.load_centre()
+        return [(i, transfer(a, P, C)) for i, a in zip(idx, held_actions(given), strict=True)]
+
+    def has_lateral_actions(self) -> bool:
+        """Whether any load stage puts a horizontal force or a moment on the loaded face."""
+        return any(np.any(np.abs(a[[0, 1, 3, 4, 5]]) > 0.0) for _, a in self.cap_actions())
+
+    def _check_actions(self) -> None:
+        """Horizontal forces and moments need one loaded face: a cap, or a single pile.
+
+        A capacity stage raises the vertical load alone, which then acts at the face centre:
+        the action point must lie above it.
+        """
+        if self.cap is None and self.piles.count > 1:
+            for i, a in self.cap_actions():
+                if np.any(np.abs(a[[0, 1, 3, 4, 5]]) > 0.0):
+                    k = next(k for k in (0, 1, 3, 4, 5) if abs(a[k]) > 0.0)
+                    raise ScenarioError(
+                        f"stages[{i}].{ACTION_KEYS[k]}", float(a[k]),
+                        "horizontal forces and moments need a cap to share them between the "
+                        f"{self.piles.count} piles (or a single pile); allowed without a cap:"
+                        " a vertical load only (with the action point above the group centre)")
+        P, C = self.action_point(), self.load_centre()
+        if self.capacity_stage is not None and max(abs(P[0] - C[0]), abs(P[1] - C[1])) > 1e-9:
+            raise ScenarioError("actions.point_m", list(P), "a capacity stage raises the vertical"
+                                f" load at the loaded face's centre ({C[0]:g}, {C[1]:g}): the "
+                                "action point must lie above it in plan", "m")
 
     @property
     def capacity_stage(self) -> Stage | None:

@@ -30,7 +30,13 @@ from dolfinx import default_scalar_type, fem
 from dolfinx import mesh as dmesh
 
 from pilegroup.solver.geostatic import SoilColumn
-from pilegroup.solver.inputs import GAMMA_W, Discretisation, SoilMaterial, SurfaceLoad
+from pilegroup.solver.inputs import (
+    GAMMA_W,
+    Discretisation,
+    FaceAction,
+    SoilMaterial,
+    SurfaceLoad,
+)
 from pilegroup.solver.interface import NodalInterface
 from pilegroup.solver.layout import BlockLayout, Body, eps_mandel
 
@@ -154,8 +160,13 @@ class FormBuilder:
         f.add_J(0, 1, -self.dp * ufl.div(v0) * self.dx)
         f.add_J(1, 0, ufl.div(du0) * self.q * self.dx)
 
-    def surface_loads(self, loads: Sequence[SurfaceLoad]) -> list[tuple[SurfaceLoad, fem.Constant]]:
-        """``int c n . v`` on each load's facets; returns the loads with their pressure."""
+    def surface_loads(self, loads: Sequence[SurfaceLoad | FaceAction]
+                      ) -> list[tuple[SurfaceLoad | FaceAction, fem.Constant]]:
+        """``int c n . v`` (a pressure) or ``-int c t . v`` (a face action) on each load.
+
+        ``t`` is a face action's unit traction; returns the loads with their amplitude
+        constant ``c``.
+        """
         lay, md = self.layout, self.layout.md
         nrm = ufl.FacetNormal(lay.mesh)
         out = []
@@ -164,8 +175,11 @@ class FormBuilder:
             b = lay.body_of_facet(ld.facet)
             v = self.tests[lay.bodies.index(b)]
             ds = self.ds(md.facet_tag(ld.facet))
-            self.forms.add_F(lay.block_of(b), c * _plan_window(lay.mesh, ld) * ufl.inner(nrm, v)
-                             * ds)
+            if isinstance(ld, FaceAction):
+                term = -c * ufl.inner(_unit_traction(lay.mesh, ld), v) * ds
+            else:
+                term = c * _plan_window(lay.mesh, ld) * ufl.inner(nrm, v) * ds
+            self.forms.add_F(lay.block_of(b), term)
             out.append((ld, c))
         return out
 
@@ -240,6 +254,34 @@ class FormBuilder:
             P.add_J(i, i, zero * ufl.inner(du, v) * self.dx_body(b))
         P.add_J(1, 1, self.coef.beta * self.dp * self.q * self.dx)
         return P.J
+
+
+def interface_force_form(layout: BlockLayout, itf: NodalInterface) -> ufl.Form:
+    """``int (t' - p n) . v`` over the pile surfaces, ``v`` a structure test function.
+
+    The force (kN per structure dof) the soil exerts on the structure through the interface:
+    the interface's part of the structure's external force (:meth:`FormBuilder.interface`).
+    """
+    soil, struct = layout.body("soil"), layout.body("structure")
+    v_t, v_s = ufl.TestFunction(struct.V), ufl.TestFunction(soil.V)
+    r_t, _ = itf.residual_forms(v_t, v_s)
+    n = ufl.FacetNormal(layout.mesh)("+")
+    return -(r_t + layout.p("-") * ufl.inner(n, v_t("+")) * itf.surface_measure())
+
+
+def _unit_traction(mesh: dmesh.Mesh, fa: FaceAction) -> ufl.core.expr.Expr:
+    """The traction (kPa) of face action ``fa`` at unit amplitude (see :class:`FaceAction`)."""
+    x = ufl.SpatialCoordinate(mesh)
+    dx_, dy_ = x[0] - fa.centre[0], x[1] - fa.centre[1]
+    ixx, iyy = fa.inertia
+    k = fa.component
+    if k < 3:
+        return ufl.as_vector([1.0 / fa.area if j == k else 0.0 for j in range(3)])
+    if k == 3:
+        return ufl.as_vector([0.0, 0.0, dy_ / ixx])
+    if k == 4:
+        return ufl.as_vector([0.0, 0.0, -dx_ / iyy])
+    return ufl.as_vector([-dy_, dx_, 0.0]) / (ixx + iyy)
 
 
 def _plan_window(mesh: dmesh.Mesh, ld: SurfaceLoad) -> ufl.core.expr.Expr | float:

@@ -394,6 +394,41 @@ class SurfaceLoad:
 
 
 @dataclass(frozen=True)
+class FaceAction:
+    """One unit action (1 kN or 1 kN m) on a plane horizontal face, times an action amplitude.
+
+    ``component`` 0..5 is Fx, Fy, Fz, Mx, My, Mz about the face's ``centre`` (m) in global
+    axes; ``area`` (m^2) and ``inertia`` ``(I_xx, I_yy)`` (m^4, about the centre) are those of
+    the whole face (a symmetry-reduced mesh holds part of it and carries that part's share).
+    The traction (kPa per unit amplitude) is statically equivalent to the unit action: ``e_k /
+    area`` for a force; ``e_z (y - y_c) / I_xx`` for Mx, ``-e_z (x - x_c) / I_yy`` for My (a
+    linear bearing pressure); ``(-(y - y_c), x - x_c, 0) / (I_xx + I_yy)`` for Mz (a
+    torsional shear). Its amplitude is that of action ``action`` (set by the stages).
+    """
+
+    facet: str
+    component: int
+    action: int
+    centre: tuple[float, float, float]
+    area: float
+    inertia: tuple[float, float]
+    #: a face action never follows the load factor: its amplitude is its value (kN or kN m)
+    ramp = False
+    #: the amplitude multiplies the unit action
+    pressure = 1.0
+
+    def __post_init__(self) -> None:
+        if self.component not in range(6):
+            raise SolverInputError(f"face action on {self.facet!r}: component = "
+                                   f"{self.component!r} (allowed: 0..5 = Fx, Fy, Fz, Mx, My, Mz)")
+        for key in ("area", "inertia"):
+            vals = np.atleast_1d(getattr(self, key))
+            if not np.all(np.isfinite(vals)) or np.any(vals <= 0.0):
+                raise SolverInputError(f"face action on {self.facet!r}: {key} = "
+                                       f"{getattr(self, key)!r} (allowed: > 0)")
+
+
+@dataclass(frozen=True)
 class RigidPlate:
     """A rigid, frictionless plate on a facet group, under force control.
 
@@ -426,9 +461,10 @@ class SolverStage:
             result, recorded in ``RunLog.capacity_end``).
         duration: day.
         load_factor: load factor at the end of a load or capacity stage (loads with ``ramp``).
-        ground: a ground stage's amplitudes of the ground actions at its end (the ``action``
-            indices of :class:`SurfaceLoad` and :class:`PressureBC`); the stages before set
-            the start (all 0 at first).
+        ground: a ground or load stage's amplitudes of the actions at its end (the
+            ``action`` indices of :class:`SurfaceLoad`, :class:`FaceAction` and
+            :class:`PressureBC`: surcharges, water table, cap actions), ramped over the stage;
+            the stages before set the start (all 0 at first); empty: held.
         dt0: first step of this stage (day); ``None`` keeps the stepper's current size.
         dt_max: largest step of this stage (day; ``None``: the run's), e.g. so that a capacity
             stage's curve has enough points.
@@ -452,7 +488,8 @@ class SolverStage:
         if self.kind == "capacity" and not self.duration > 0.0:
             raise SolverInputError(f"stage {self.name!r}: a capacity stage ramps its load over"
                                    f" a duration > 0 (duration = {self.duration!r})")
-        if self.ground and self.kind != "ground":
-            raise SolverInputError(f"stage {self.name!r}: ground amplitudes need kind 'ground'")
+        if self.ground and self.kind not in ("ground", "load"):
+            raise SolverInputError(f"stage {self.name!r}: action amplitudes need kind 'ground' "
+                                   "or 'load'")
         require_non_negative(f"stage {self.name!r} duration", self.duration, "day",
                              error=SolverInputError)

@@ -52,6 +52,45 @@ class SettlementProbe:
         return self._comm.allreduce(val, op=MPI.SUM) / self._area
 
 
+class FaceMotion:
+    """Rigid-body motion of a plane horizontal face fitted to a body's displacement over it.
+
+    ``(u_x, u_y, u_z, theta_x, theta_y, theta_z)`` (m, rad) about ``centre``: the mean
+    displacement over the face, ``theta_x = int (y - y_c) u_z / I_xx``, ``theta_y = -int
+    (x - x_c) u_z / I_yy``, ``theta_z = int ((x - x_c) u_y - (y - y_c) u_x) / (I_xx + I_yy)``
+    (the least-squares rigid motion of a face with ``I_xy = 0`` about the centre: rectangles
+    and regular polygons centred on it). Integrals over the meshed part of the face; in a
+    symmetry-reduced mesh the components the mirror planes make zero are not meaningful (the
+    caller sets them to zero).
+    """
+
+    def __init__(self, problem: BiotProblem, names: Sequence[str],
+                 centre: Sequence[float]) -> None:
+        md = problem.md
+        ds = ufl.Measure("ds", domain=md.mesh, subdomain_data=md.facet_tags)
+        face = sum((ds(md.facet_tag(n)) for n in names[1:]), start=ds(md.facet_tag(names[0])))
+        body = problem.body_of_facet(names[0])
+        em = [body.emap] if body.emap is not None else None
+        x, u = ufl.SpatialCoordinate(md.mesh), body.u
+        dx_, dy_ = x[0] - centre[0], x[1] - centre[1]
+        self._comm = md.mesh.comm
+        self._geo = self._sum([fem.form(f * face) for f in (1.0 + 0.0 * x[0], dy_ ** 2,
+                                                              dx_ ** 2)])
+        self._forms = [fem.form(f * face, entity_maps=em) for f in
+                       (u[0], u[1], u[2], dy_ * u[2], dx_ * u[2], dx_ * u[1] - dy_ * u[0])]
+
+    def _sum(self, forms: Sequence[fem.Form]) -> np.ndarray:
+        loc = np.array([fem.assemble_scalar(f) for f in forms])
+        return self._comm.allreduce(loc, op=MPI.SUM)
+
+    def __call__(self) -> np.ndarray:
+        """The six components (m, rad), all-reduced (collective)."""
+        area, ixx, iyy = self._geo
+        v = self._sum(self._forms)
+        return np.array([v[0] / area, v[1] / area, v[2] / area, v[3] / ixx, -v[4] / iyy,
+                         v[5] / (ixx + iyy)])
+
+
 class PointSampler:
     """Values of a function at fixed points, located once, gathered on every rank.
 

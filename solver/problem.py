@@ -30,13 +30,14 @@ from pilegroup.geometry import groups
 from pilegroup.geometry.meshdata import MeshData
 from pilegroup.solver.algebra import MonolithicAlgebra
 from pilegroup.solver.constraints import Constraints, RigidPlateControl
-from pilegroup.solver.forms import Coefficients, FormBuilder
+from pilegroup.solver.forms import Coefficients, FormBuilder, interface_force_form
 from pilegroup.solver.geostatic import SoilColumn
 from pilegroup.solver.initial_state import InitialState
 from pilegroup.solver.inputs import (
     Discretisation,
     DisplacementBC,
     ElasticSolid,
+    FaceAction,
     InstallationExcess,
     InterfaceCoupling,
     PressureBC,
@@ -85,7 +86,7 @@ class BiotProblem(MonolithicAlgebra):
         disc: Discretisation | None = None,
         displacement_bcs: Sequence[DisplacementBC] = (),
         pressure_bcs: Sequence[PressureBC] = (),
-        loads: Sequence[SurfaceLoad] = (),
+        loads: Sequence[SurfaceLoad | FaceAction] = (),
         plates: Sequence[RigidPlate] = (),
         options: SolverOptions | None = None,
         self_weight: bool = True,
@@ -119,6 +120,7 @@ class BiotProblem(MonolithicAlgebra):
             self.constraints.hold(self.layout, "structure")
             self.interface.active = False  # type: ignore[union-attr]
         self.newton = NewtonSolver(self, self.options.newton)
+        self._itf_force: fem.Form | None = None
         self.load_factor = 0.0
         self.undrained = False
         for b in self.bodies:
@@ -144,7 +146,7 @@ class BiotProblem(MonolithicAlgebra):
         return self.column.interface_traction(x, z, groups.soil_layer(m + 1) if m < L
                                               else None)
 
-    def _define_forms(self, loads: Sequence[SurfaceLoad], self_weight: bool) -> None:
+    def _define_forms(self, loads: Sequence[SurfaceLoad | FaceAction], self_weight: bool) -> None:
         """Every term of the weak form, compiled once."""
         fb = FormBuilder(self.layout, self.disc, self.coef)
         fb.momentum(self_weight)
@@ -260,6 +262,25 @@ class BiotProblem(MonolithicAlgebra):
         owned = dofs[dofs < b.V.dofmap.index_map.size_local * 3]
         return self.block_resultant(owned, self.bodies.index(b))
 
+    def interface_force(self) -> tuple[np.ndarray, np.ndarray]:
+        """(owned structure node coordinates (n, 3) m, the soil's force on them (n, 3) kN).
+
+        The force the soil exerts on the structure through the pile-soil interface (effective
+        traction and pore pressure) at the current state, per owned node of the structure's
+        displacement space; piles tied to the soil have no interface (an error).
+        """
+        if self.interface is None:
+            raise SolverInputError("interface_force: the piles are tied to the soil (no "
+                                   "interface)")
+        if self._itf_force is None:
+            self._itf_force = fem.form(interface_force_form(self.layout, self.interface),
+                                       entity_maps=self.layout.emaps)
+        V = self.body("structure").V
+        vec = fem.assemble_vector(self._itf_force)
+        vec.scatter_reverse(la.InsertMode.add)
+        n = V.dofmap.index_map.size_local
+        return V.tabulate_dof_coordinates()[:n], vec.array[: 3 * n].reshape(n, 3)
+
     def block_resultant(self, owned: np.ndarray, body: int) -> float:
         """Sum (kN) of body ``body``'s unconstrained residual over owned dofs ``owned``."""
         vec = fem.assemble_vector(self._F_u_forms[body])
@@ -299,7 +320,7 @@ class BiotProblem(MonolithicAlgebra):
         self.layout.fields_to_x(self.x)
 
     def set_ground(self, amplitudes: Sequence[float]) -> None:
-        """Amplitudes of the ground actions (surcharges, water table) for the next steps."""
+        """Amplitudes of the actions (surcharges, water table, cap actions) for the next steps."""
         n = 1 + max([ld.action for ld, _ in self._load_consts if ld.action is not None]
                     + self.constraints.actions, default=-1)
         if len(amplitudes) < n:

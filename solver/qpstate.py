@@ -60,6 +60,7 @@ class QuadratureState:
                  groups: dict[str, tuple[SoilMaterial | ElasticSolid, np.ndarray]], degree: int,
                  strain_increment: ufl.core.expr.Expr) -> None:
         self.mesh = mesh
+        self.degree = degree
         cell = mesh.basix_cell()
         self.points, self.weights = basix.make_quadrature(cell, degree)
         self.nqp = self.points.shape[0]

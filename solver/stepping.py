@@ -16,8 +16,8 @@ Stages (docs/model.md):
   with the preset's fallback, if it has one (as an instantaneous step).
   When a layer starts with an excess pore pressure (consolidating layers), the check step is
   undrained (no water may flow before the first stage that has a duration).
-* ``load``: load factor ramped linearly to the stage's value; ``duration = 0`` is one
-  instantaneous undrained step.
+* ``load``: load factor ramped linearly to the stage's value, and the action amplitudes it
+  sets (cap actions) with it; ``duration = 0`` is one instantaneous undrained step.
 * ``ground``: the amplitudes of the ground actions (surcharges, water table) ramped linearly to
   the stage's values, the load factor held; ``duration = 0`` is instantaneous.
 * ``consolidation``: every action held to the stage end.
@@ -269,7 +269,7 @@ class _Run:
                  state: RunState, boundary: Boundary | None) -> None:
         self.problem, self.stages, self.ts = problem, stages, ts
         self.state, self.boundary = state, boundary
-        #: amplitudes of the ground actions: none when no stage sets them
+        #: amplitudes of the actions (ground, cap): none when no stage sets them
         self.n_ground = max((len(st.ground) for st in stages), default=0)
         self.stepper = AdaptiveStepper(ts, state.log)
         if state.dt is not None:
@@ -294,7 +294,7 @@ class _Run:
         for i, st in enumerate(self.stages):
             t1 = t + st.duration
             lam1 = st.load_factor if st.kind in ("load", "capacity") else lam
-            g1 = tuple(st.ground) + g[len(st.ground):] if st.kind == "ground" else g
+            g1 = tuple(st.ground) + g[len(st.ground):] if st.ground else g
             if i < s.stage or (i == s.stage and s.done):
                 if st.kind == "install":  # a resumed run's structure is in place again
                     self.problem.install_structure(restored=True)

@@ -27,10 +27,10 @@ from pilegroup.geometry.convert import build_mesh
 from pilegroup.model import load_scenario
 from pilegroup.solver.probes import SettlementProbe
 from pilegroup.solver.stepping import run_stages
+from pilegroup.studies.run.cap_loads import loaded_facets
 from pilegroup.studies.run.pipeline import (
     GEOSTATIC_TOL_M,
     build_problem,
-    load_facets,
     solver_stages,
     time_stepping,
 )
@@ -82,7 +82,7 @@ def scenario_rows(path: str, factors: Sequence[float] = (1.0, 10.0, 100.0)
                 itf, quadrature=q, normal_stiffness_factor=f * itf.normal_stiffness_factor))
             t0 = time.perf_counter()
             pb = build_problem(sc, geo, md)
-            probe = SettlementProbe(pb, load_facets(sc, md))
+            probe = SettlementProbe(pb, loaded_facets(sc, md))
             log = run_stages(pb, solver_stages(sc), time_stepping(sc),
                              geostatic_tol=GEOSTATIC_TOL_M)
             rows.append({"case": sc.name, "quadrature": q,

@@ -41,7 +41,22 @@ positive down; forces kN; stresses kPa; displacements m.
   (its head force due to the loads, from its top element layer, and its settlement there);
   the tangent stiffness of the segment ending at the row (empty at the first row and where the
   settlement did not grow). The criteria read off it are in ``summary.json``
-  (:mod:`pilegroup.studies.results.capacity`).
+  (:mod:`pilegroup.studies.results.capacity`);
+* ``cap_motion.csv``: ``t_day,ux_m,uy_m,uz_m,rx_rad,ry_rad,rz_rad``: the cap's (or the single
+  pile head's) rigid motion at the scenario's action point, global axes, z up (a settlement is
+  a negative ``uz_m``);
+* ``pile_heads.csv``: ``t_day,pile,x_m,y_m,N_kN,Vx_kN,Vy_kN,Mx_kNm,My_kNm,T_kNm,depth_m``: the
+  cap's action on each pile at its head (axial force compression positive; shears, moments and
+  torque in global axes about the head centre); ``depth_m`` 0, or for tied piles the depth of
+  the uppermost section that stands for the head;
+* ``pile_bending.csv``: ``t_day,pile,depth_m,N_kN,Vx_kN,Vy_kN,Mx_kNm,My_kNm,T_kNm,ux_m,uy_m``:
+  section actions (the part above on the part below) and lateral deflection at the element
+  layers' mid-heights;
+* ``pile_max_moment.csv``: ``t_day,pile,M_max_kNm,depth_m``: the largest resultant bending
+  moment ``sqrt(Mx^2 + My^2)`` of each pile (head included) and its depth.
+
+The conventions of the last three are those of :mod:`pilegroup.studies.run.section_probe`;
+every value is the change since the geostatic state.
 """
 
 from __future__ import annotations
@@ -64,6 +79,10 @@ NEUTRAL_PLANE_CSV = "neutral_plane.csv"
 SETTLEMENT_PROFILES_CSV = "settlement_profiles.csv"
 TROUGH_CSV = "surface_trough.csv"
 CAPACITY_CSV = "capacity.csv"
+CAP_MOTION_CSV = "cap_motion.csv"
+HEADS_CSV = "pile_heads.csv"
+BENDING_CSV = "pile_bending.csv"
+MAX_MOMENT_CSV = "pile_max_moment.csv"
 
 _LAYER_MEANS = ("t_day", "pile", "layer", "layer_name", "depth_top_m", "depth_bottom_m",
                 "shaft_friction_kPa", "relative_displacement_m", "viscoplastic_slip_m",
@@ -88,6 +107,12 @@ COLUMNS: dict[str, tuple[str, ...]] = {
     TROUGH_CSV: ("t_day", "x_m", "settlement_m"),
     CAPACITY_CSV: ("t_day", "pile", "load_factor", "load_kN", "settlement_m",
                    "tangent_stiffness_kN_per_m"),
+    CAP_MOTION_CSV: ("t_day", "ux_m", "uy_m", "uz_m", "rx_rad", "ry_rad", "rz_rad"),
+    HEADS_CSV: ("t_day", "pile", "x_m", "y_m", "N_kN", "Vx_kN", "Vy_kN", "Mx_kNm", "My_kNm",
+                "T_kNm", "depth_m"),
+    BENDING_CSV: ("t_day", "pile", "depth_m", "N_kN", "Vx_kN", "Vy_kN", "Mx_kNm", "My_kNm",
+                  "T_kNm", "ux_m", "uy_m"),
+    MAX_MOMENT_CSV: ("t_day", "pile", "M_max_kNm", "depth_m"),
 }
 #: The columns that hold text; all others hold numbers.
 TEXT_COLUMNS = frozenset({"stage", "layer_name"})
@@ -103,6 +128,10 @@ NEUTRAL_PLANE_COLUMNS = ",".join(COLUMNS[NEUTRAL_PLANE_CSV])
 SETTLEMENT_PROFILE_COLUMNS = ",".join(COLUMNS[SETTLEMENT_PROFILES_CSV])
 TROUGH_COLUMNS = ",".join(COLUMNS[TROUGH_CSV])
 CAPACITY_COLUMNS = ",".join(COLUMNS[CAPACITY_CSV])
+CAP_MOTION_COLUMNS = ",".join(COLUMNS[CAP_MOTION_CSV])
+HEAD_COLUMNS = ",".join(COLUMNS[HEADS_CSV])
+BENDING_COLUMNS = ",".join(COLUMNS[BENDING_CSV])
+MAX_MOMENT_COLUMNS = ",".join(COLUMNS[MAX_MOMENT_CSV])
 #: The value columns of ``gauges.csv`` (after time, pile, section and depth).
 GAUGE_VALUES = COLUMNS[GAUGES_CSV][4:]
 

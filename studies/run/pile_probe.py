@@ -128,6 +128,15 @@ class PileProbe:
         self._N0: dict[int, np.ndarray] = {}
 
     # ------------------------------------------------------------------ quantities
+    def element_layers(self, i: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(local cells, their mid-height z, the element layers' mid-heights) of meshed pile ``i``.
+
+        The mid-heights are those below the ground surface, top down, over all ranks; the
+        cells include the part embedded in the cap (mid-height z > 0).
+        """
+        cells, zc = self._pile_cells.get(i, (np.zeros(0, np.int32), np.zeros(0)))
+        return cells, zc, self._levels[i]
+
     def axial_force(self, i: int, averages: dict | None = None
                     ) -> tuple[np.ndarray, np.ndarray]:
         """(depth of the element-layer mid-heights, axial force kN) of pile ``i``.
@@ -146,11 +155,11 @@ class PileProbe:
             k = np.searchsorted(-levels, -zc[below])
             np.add.at(loc, k, self._vol[cells[below]] * szz)
         tot = _sum(self.comm, loc)
-        edges = self._layer_heights(levels)
+        edges = self.layer_heights(levels)
         return -levels, -tot / edges
 
     @staticmethod
-    def _layer_heights(levels: np.ndarray) -> np.ndarray:
+    def layer_heights(levels: np.ndarray) -> np.ndarray:
         """Element-layer heights from their mid-heights (top down, contiguous layers)."""
         h = np.zeros(levels.size)
         top = 0.0

@@ -56,11 +56,19 @@ from pilegroup.solver.probes import facet_area
 from pilegroup.studies.results.records import SOLVER_SUMMARY_JSON, RunSummary
 from pilegroup.studies.results.tables import GAUGES_CSV
 from pilegroup.studies.run.auto_preset import scenario_preset
+from pilegroup.studies.run.cap_loads import (
+    face_actions,
+    first_slot,
+    loaded_facets,
+    stage_amplitudes,
+    used_components,
+)
 from pilegroup.studies.run.capacity_probe import CapacityProbe
 from pilegroup.studies.run.checkpoint import Checkpoints
 from pilegroup.studies.run.gauge_probe import GaugeProbe
 from pilegroup.studies.run.ground_probe import GroundProbe
 from pilegroup.studies.run.pile_probe import LoadSettlementCurve, PileProbe, SettlementSeries
+from pilegroup.studies.run.section_probe import CapMotion, PileSections
 
 log = logging.getLogger(__name__)
 
@@ -126,9 +134,9 @@ def build_problem(sc: Scenario, geo: ResolvedGeometry, md: MeshData, preset: str
                (groups.SIDE_YMAX, 1), (groups.SYM_X, 0), (groups.SYM_Y, 1))
     dbcs = [DisplacementBC(f, c) for f, c in rollers if f in md.facet_names]
     dbcs += [DisplacementBC(groups.BOTTOM, c) for c in range(3)]
-    names = load_facets(sc, md)
+    names = loaded_facets(sc, md)
     loads = [SurfaceLoad(f, sc.total_cap_load() / full_load_area(sc, geo, md))
-             for f in names] + surcharge_loads(sc)
+             for f in names] + surcharge_loads(sc) + face_actions(sc, geo, md)
     disc = Discretisation(sc.numerics.element)
     p = scenario_preset(sc, geo.symmetry, estimate_dofs(md, sc.numerics.element), preset)
     num = sc.numerics
@@ -204,7 +212,7 @@ def full_load_area(sc: Scenario, geo: ResolvedGeometry, md: MeshData) -> float:
     """
     if sc.cap is not None:
         return sc.cap.size_x_m * sc.cap.size_y_m
-    return facet_area(md, load_facets(sc, md)) / geo.kept_fraction
+    return facet_area(md, loaded_facets(sc, md)) / geo.kept_fraction
 
 
 def interface_law(sc: Scenario, j: int, mesh_size: float) -> PileSoilInterface | None:
@@ -239,11 +247,6 @@ def interface_coupling(sc: Scenario, mesh_size: float) -> InterfaceCoupling | No
     return InterfaceCoupling(laws + laws, quadrature=sc.interface.quadrature)
 
 
-def load_facets(sc: Scenario, md: MeshData) -> list[str]:
-    """Facet groups that carry the cap load: the cap top, or the pile heads without a cap."""
-    return [groups.CAP_TOP] if sc.cap is not None else groups.heads(md.facet_names)
-
-
 def estimate_dofs(md: MeshData, element: str) -> int:
     """Rough global unknown count of the u-p problem (vertices, or Q2 nodes ~ 8 x vertices)."""
     nv = md.mesh.topology.index_map(0).size_global
@@ -255,13 +258,16 @@ def solver_stages(sc: Scenario) -> list[SolverStage]:
 
     Surcharge and groundwater stages are ground stages: surcharge ``i`` ramps its action's
     amplitude from 0 to 1, a groundwater stage the water-table action's amplitude (the
-    drawdown so far, m) by its ``drawdown_m``.
+    drawdown so far, m) by its ``drawdown_m``. A load stage ramps the cap actions' amplitudes
+    (:mod:`~pilegroup.studies.run.cap_loads`) with its load factor.
     """
     out = []
     total = sc.total_cap_load()
     surcharges = ground_actions(sc)
-    amp = [0.0] * (len(surcharges) + any(st.kind == "groundwater" for st in sc.stages))
-    for st, t0, t1 in sc.stage_times():
+    caps = stage_amplitudes(sc)
+    slot = first_slot(sc)
+    amp = [0.0] * (slot + len(used_components(sc)))
+    for i, (st, t0, t1) in enumerate(sc.stage_times()):
         if st.kind == "geostatic":
             out.append(SolverStage(st.name, "geostatic"))
         elif st.kind == "installation":
@@ -271,8 +277,10 @@ def solver_stages(sc: Scenario) -> list[SolverStage]:
             out.append(SolverStage(st.name, "capacity", duration=t1 - t0, load_factor=1.0,
                                    dt0=min(dt, sc.numerics.time.dt_initial_day), dt_max=dt))
         elif st.kind == "load":
-            lf = st.cap_load_kN / total if total > 0 else 0.0  # type: ignore[operator]
-            out.append(SolverStage(st.name, "load", duration=t1 - t0, load_factor=lf))
+            lf = st.vertical_kN / total if total > 0 else 0.0  # type: ignore[operator]
+            amp[slot:] = caps[i]
+            out.append(SolverStage(st.name, "load", duration=t1 - t0, load_factor=lf,
+                                   ground=tuple(amp)))
         elif st.kind in ("surcharge", "groundwater"):
             if st.kind == "surcharge":
                 amp[surcharges.index(st)] = 1.0
@@ -367,7 +375,7 @@ def run_coupled(sc: Scenario, geo: ResolvedGeometry, md: MeshData, out: Path,
     """
     t0 = time.perf_counter()
     pb = build_problem(sc, geo, md, preset)
-    settlement = SettlementSeries(pb, load_facets(sc, md), out / "settlement.csv")
+    settlement = SettlementSeries(pb, loaded_facets(sc, md), out / "settlement.csv")
     piles = PileProbe(sc, geo, pb, out)
     gauges = GaugeProbe(sc, pb, piles, out / GAUGES_CSV) if sc.outputs.gauge_depths_m else None
     ground = GroundProbe(sc, pb, piles, out)
@@ -391,7 +399,8 @@ def run_coupled(sc: Scenario, geo: ResolvedGeometry, md: MeshData, out: Path,
     writer = SummaryWriter(out / SOLVER_SUMMARY_JSON, pb.comm, summary)
     curve = LoadSettlementCurve(pb, settlement.probe, sc.total_cap_load(),
                                 out / "load_settlement.csv")
-    exports: list[Export] = [settlement, piles, ground, curve]
+    exports: list[Export] = [settlement, piles, ground, curve,
+                             PileSections(sc, geo, pb, piles, out), CapMotion(sc, geo, pb, out)]
     if capacity is not None:  # after the pile probe, which sets the forces' zero
         exports.append(capacity)
     if gauges is not None:

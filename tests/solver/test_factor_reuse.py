@@ -23,7 +23,7 @@ def test_direct_reuse_matches_direct(tmp_path, monkeypatch, mode, small_pile):
     out = {}
     for preset in ("direct", "direct_reuse"):
         pb = pier.build_problem(sc, resolve_geometry(sc), md, preset)
-        probe = SettlementProbe(pb, pier.load_facets(sc, md))
+        probe = SettlementProbe(pb, pier.loaded_facets(sc, md))
         log = run_stages(pb, pier.solver_stages(sc), pier.time_stepping(sc),
                          geostatic_tol=pier.GEOSTATIC_TOL_M)
         out[preset] = (probe(), log.newton_total, pb.refactorisations)

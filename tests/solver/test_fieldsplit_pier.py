@@ -28,7 +28,7 @@ def _run(sc, md, preset, options=None):
     solver = dataclasses.replace(sc.numerics.solver, options=dict(options or {}))
     sc = dataclasses.replace(sc, numerics=dataclasses.replace(sc.numerics, solver=solver))
     pb = pier.build_problem(sc, resolve_geometry(sc), md, preset)
-    probe = SettlementProbe(pb, pier.load_facets(sc, md))
+    probe = SettlementProbe(pb, pier.loaded_facets(sc, md))
     log = run_stages(pb, pier.solver_stages(sc), pier.time_stepping(sc),
                      geostatic_tol=pier.GEOSTATIC_TOL_M)
     return probe(), log, pb
