@@ -14,6 +14,8 @@ the tolerance and the source of the reference. Modules:
 * ``downdrag_cases``: ``downdrag-end-bearing``, ``downdrag-floating`` (the whole run pipeline);
 * ``radial_cases``: ``radial-consolidation`` (installation pore pressures, the whole run
   pipeline);
+* ``lateral_cases``: ``lateral-single-pile``, ``cap-equilibrium``, ``rigid-cap-moment`` (cap
+  actions, the whole run pipeline);
 * ``runner``: :func:`run_cases` and :func:`main`
   (``python -m pilegroup.studies.verification [CASE ...] [--size fast|bench] [--json]``,
   also under ``mpirun -n 2``; ``pilegroup verify``).
@@ -29,6 +31,7 @@ from pilegroup.studies.verification import (  # noqa: F401
     ground_cases,
     downdrag_cases,
     radial_cases,
+    lateral_cases,
 )
 # isort: on
 

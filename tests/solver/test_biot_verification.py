@@ -19,7 +19,8 @@ def test_cases_are_registered_in_run_order():
     assert list(ver.CASES) == ["terzaghi", "mandel", "triaxial", "shaft-capacity",
                                "interface-patch", "tied-limit", "consolidation-surcharge",
                                "downdrag-end-bearing", "downdrag-floating",
-                               "radial-consolidation"]
+                               "radial-consolidation", "lateral-single-pile",
+                               "cap-equilibrium", "rigid-cap-moment"]
 
 
 def test_registry_passes_only_accepted_overrides(monkeypatch):
