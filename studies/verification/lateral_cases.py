@@ -79,8 +79,10 @@ def randolph_head(H: float, M: float, d: float, E_p: float, G: float, nu: float
 
 def _soil(name: str, E_kPa: float = E_SOIL, thickness: float | None = None
           ) -> dict[str, Any]:
-    """A soil layer; its interface is a linear spring (``n = 0``, ``R_f = 0``) far from its
-    strength, so that the group cases' responses are linear in the actions."""
+    """A soil layer whose interface is a linear spring far from its strength.
+
+    ``n = 0``, ``R_f = 0``: the group cases' responses are linear in the actions.
+    """
     lay = {"name": name, "gamma_kN_per_m3": 18.0, "E_MPa": E_kPa / 1e3, "nu": NU_SOIL,
            "phi_deg": 20.0, "c_kPa": 20.0, "k_m_per_day": 10.0, "e0": 0.8,
            "interface": {"delta_deg": 20.0, "K": 300.0, "n": 0.0, "R_f": 0.0,
