@@ -21,7 +21,8 @@ from pilegroup.errors import ScenarioError
 from pilegroup.model.scenario import Scenario
 
 #: Scenarios shipped with the package (``pilegroup scenario show NAME``).
-BUNDLED = ("pier667", "pier667_downdrag", "group3x3_downdrag", "single_pile")
+BUNDLED = ("pier667", "pier667_downdrag", "group3x3_downdrag", "single_pile",
+           "pier667_lateral")
 _INDEXED = re.compile(r"([A-Za-z_][A-Za-z0-9_]*)\[(\d+)\]")
 
 

@@ -16,6 +16,7 @@ from matplotlib.figure import Figure
 from pilegroup.fileio import atomic_path
 from pilegroup.studies.report.gauge_plots import GAUGE_FIGURES
 from pilegroup.studies.report.ground_plots import GROUND_FIGURES
+from pilegroup.studies.report.lateral_plots import LATERAL_FIGURES
 from pilegroup.studies.report.paper_values import (
     EARLY_DAY,
     PAPER_MESH_M,
@@ -229,6 +230,7 @@ FIGURES: tuple[tuple[str, str, str, Callable[[RunData], Figure]], ...] = (
      "capacity", plot_capacity),
     *GAUGE_FIGURES,
     *GROUND_FIGURES,
+    *LATERAL_FIGURES,
 )
 
 

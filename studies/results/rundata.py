@@ -22,6 +22,8 @@ import numpy as np
 
 from pilegroup.model import ScenarioError
 from pilegroup.studies.results.tables import (
+    BENDING_CSV,
+    CAP_MOTION_CSV,
     CAPACITY_CSV,
     GAUGES_CSV,
     LAYER_HISTORY_CSV,
@@ -40,7 +42,8 @@ log = logging.getLogger(__name__)
 
 #: The CSV files a run folder is read from, in this order.
 RUN_FILES = (SETTLEMENT_CSV, PROFILES_CSV, LAYER_HISTORY_CSV, LOADS_CSV, LOAD_SETTLEMENT_CSV,
-             GAUGES_CSV, NEUTRAL_PLANE_CSV, SETTLEMENT_PROFILES_CSV, TROUGH_CSV, CAPACITY_CSV)
+             GAUGES_CSV, NEUTRAL_PLANE_CSV, SETTLEMENT_PROFILES_CSV, TROUGH_CSV, CAPACITY_CSV,
+             BENDING_CSV, CAP_MOTION_CSV)
 
 #: Default centre pile of a 3 x 3 group numbered row by row.
 DEFAULT_CENTRE_PILE = 5
@@ -85,6 +88,10 @@ class RunData:
     """``surface_trough.csv``."""
     capacity: Table | None = None
     """``capacity.csv`` (a run with a capacity stage), the group and every pile."""
+    bending: Table | None = None
+    """``pile_bending.csv``, every pile; ``None`` when no pile bends (a vertical load only)."""
+    cap_motion: Table | None = None
+    """``cap_motion.csv``; ``None`` when the cap neither moves sideways nor rotates."""
 
     @property
     def complete(self) -> bool | None:
@@ -175,7 +182,16 @@ def load_run(out_dir: Path) -> RunData:
                    raw[LOAD_SETTLEMENT_CSV], summary, centre,
                    _end_of_loading(raw[SETTLEMENT_CSV], scenario), names,
                    _centre_only(GAUGES_CSV, raw[GAUGES_CSV], centre), raw[NEUTRAL_PLANE_CSV],
-                   raw[SETTLEMENT_PROFILES_CSV], raw[TROUGH_CSV], raw[CAPACITY_CSV])
+                   raw[SETTLEMENT_PROFILES_CSV], raw[TROUGH_CSV], raw[CAPACITY_CSV],
+                   _if_lateral(raw[BENDING_CSV], ("Mx_kNm", "My_kNm")),
+                   _if_lateral(raw[CAP_MOTION_CSV], ("ux_m", "uy_m", "rx_rad", "ry_rad")))
+
+
+def _if_lateral(t: Table | None, columns: tuple[str, ...]) -> Table | None:
+    """``t`` when any of its ``columns`` is non-zero (a lateral response), else ``None``."""
+    if t is None or not any(np.any(t[c] != 0.0) for c in columns if c in t):
+        return None
+    return t
 
 
 def layer_series(run: RunData, column: str) -> dict[int, tuple[np.ndarray, np.ndarray]]:
