@@ -54,6 +54,8 @@ def _load_asymmetry(sc: Scenario, axis: str) -> str | None:
     (:data:`~pilegroup.model.actions.ANTISYMMETRIC`): a force along x keeps the plane y = 0. A
     surcharge is symmetric when its rectangle is centred on the plane (the whole surface is).
     """
+    if sc.outputs.cap_stiffness:
+        return "outputs.cap_stiffness: the stiffness matrix loads the face in every component"
     for i, a in sc.cap_actions():
         for k in ANTISYMMETRIC[axis]:
             if abs(a[k]) > 0.0:

@@ -390,12 +390,17 @@ class Outputs:
 
     ``checkpoint_every_min``: a checkpoint every this many minutes of wall time as well, at
     the next step boundary (0: only at the output times and on SIGTERM/SIGINT).
+
+    ``cap_stiffness``: at the end of the run, the loaded face's 6 x 6 stiffness matrix about the
+    action point (``cap_stiffness.csv``; docs/model.md, "Cap actions"): the model is then the
+    full one, with every action component on the face.
     """
 
     xdmf: bool = True
     plots: bool = True
     gauge_depths_m: tuple[float, ...] = ()
     checkpoint_every_min: float = 0.0
+    cap_stiffness: bool = False
 
     def __post_init__(self) -> None:
         for i, z in enumerate(self.gauge_depths_m):

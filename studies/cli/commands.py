@@ -50,6 +50,12 @@ DESCRIPTIONS = {
     "run": ("Validate the scenario, build its mesh and run every stage that is implemented; write "
             "outputs and summary.json to --out. One run at a time writes into a folder: a "
             "second run into the --out of a running one exits 2 naming the running process."),
+    "stiffness": ("Run the scenario as the whole foundation and write, at its end, the cap's 6 x 6"
+                  " stiffness matrix about the action point ([actions] point_m; default the cap"
+                  " top's centre) to cap_stiffness.csv in --out: six small undrained probe "
+                  "increments from the final state (without a cap: the single pile head's "
+                  "matrix). Shorten the run with --set time.end_day=DAY to probe an earlier "
+                  "time. Everything a run writes is written too."),
     "mesh": ("Mesh the scenario with gmsh (cap, piles, layered soil; plan quads extruded through "
              "the layers), write mesh.xdmf with cell and facet tags (ParaView), "
              "mesh_summary.json, plan.png and cutaway.png, and print counts and quality. Meshes "
@@ -130,7 +136,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
     from pilegroup.studies.run.interrupt import stop_on_signals
     from pilegroup.studies.run.job import run_scenario
 
-    sc = load_scenario(args.scenario, _overrides(args))
+    extra = {"outputs.cap_stiffness": True} if args.command == "stiffness" else {}
+    sc = load_scenario(args.scenario, _overrides(args) | extra)
     out = Path(args.out) if args.out else Path("out") / sc.name
     with stop_on_signals():  # SIGTERM/SIGINT: checkpoint at the next step boundary, then stop
         summary = run_scenario(sc, out, mesh_size=args.mesh_size, stop_after=args.stop_after,
@@ -320,6 +327,8 @@ def build_parser() -> argparse.ArgumentParser:
     for name, help_, add_arguments in (
         ("scenario", "show or validate scenario files", _scenario_arguments),
         ("run", "run a scenario (main job)", _run_arguments),
+        ("stiffness", "the cap's 6 x 6 stiffness matrix at the end of a run",
+         _run_arguments),
         ("mesh", "build the all-hexahedral mesh of a scenario", _mesh_arguments),
         ("verify", "run verification cases against closed forms", _verify_arguments),
         ("bench", "benchmarks that print tables (not tests)", _bench_arguments),

@@ -30,7 +30,15 @@ def loaded_facets(sc: Scenario, md: MeshData) -> list[str]:
 
 
 def used_components(sc: Scenario) -> tuple[int, ...]:
-    """The lateral components some load stage sets non-zero (about the face centre)."""
+    """The components with a face action of their own.
+
+    The lateral components some load stage sets non-zero (about the face centre); all six
+    when the run ends with the cap stiffness matrix (``outputs.cap_stiffness``), which loads
+    the face in every component (the vertical one then twice: by the load factor's pressure
+    and by its probe's face action, which stays 0 during the run).
+    """
+    if sc.outputs.cap_stiffness:
+        return tuple(range(6))
     acts = [a for _, a in sc.cap_actions()]
     return tuple(k for k in LATERAL if any(abs(a[k]) > 0.0 for a in acts))
 
@@ -71,9 +79,14 @@ def face_actions(sc: Scenario, geo: ResolvedGeometry, md: MeshData) -> list[Face
 
 
 def stage_amplitudes(sc: Scenario) -> dict[int, tuple[float, ...]]:
-    """Stage index -> the cap actions' amplitudes (kN, kN m) at the end of that load stage."""
+    """Stage index -> the cap actions' amplitudes (kN, kN m) at the end of that load stage.
+
+    The vertical component's face action (only with ``outputs.cap_stiffness``) stays 0: the
+    load factor carries the vertical load.
+    """
     comps = used_components(sc)
-    return {i: tuple(float(a[k]) for k in comps) for i, a in sc.cap_actions()}
+    return {i: tuple(0.0 if k == 2 else float(a[k]) for k in comps)
+            for i, a in sc.cap_actions()}
 
 
 __all__ = ["LATERAL", "face_actions", "face_properties", "first_slot", "loaded_facets",

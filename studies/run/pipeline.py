@@ -69,6 +69,7 @@ from pilegroup.studies.run.gauge_probe import GaugeProbe
 from pilegroup.studies.run.ground_probe import GroundProbe
 from pilegroup.studies.run.pile_probe import LoadSettlementCurve, PileProbe, SettlementSeries
 from pilegroup.studies.run.section_probe import CapMotion, PileSections
+from pilegroup.studies.run.stiffness import STIFFNESS_CSV, cap_stiffness, write_cap_stiffness
 
 log = logging.getLogger(__name__)
 
@@ -399,8 +400,9 @@ def run_coupled(sc: Scenario, geo: ResolvedGeometry, md: MeshData, out: Path,
     writer = SummaryWriter(out / SOLVER_SUMMARY_JSON, pb.comm, summary)
     curve = LoadSettlementCurve(pb, settlement.probe, sc.total_cap_load(),
                                 out / "load_settlement.csv")
+    motion = CapMotion(sc, geo, pb, out)
     exports: list[Export] = [settlement, piles, ground, curve,
-                             PileSections(sc, geo, pb, piles, out), CapMotion(sc, geo, pb, out)]
+                             PileSections(sc, geo, pb, piles, out), motion]
     if capacity is not None:  # after the pile probe, which sets the forces' zero
         exports.append(capacity)
     if gauges is not None:
@@ -432,6 +434,10 @@ def run_coupled(sc: Scenario, geo: ResolvedGeometry, md: MeshData, out: Path,
         bar.close()
     if capacity is not None:
         capacity.finish(run_log.capacity_end)
+    if sc.outputs.cap_stiffness:
+        K = cap_stiffness(sc, pb, motion, stages)
+        if pb.comm.rank == 0:
+            write_cap_stiffness(out / STIFFNESS_CSV, K)
     data = run_summary(pb, run_log, summary(True))
     writer.finish(data)
     return data

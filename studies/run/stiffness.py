@@ -1,0 +1,76 @@
+"""The cap's 6 x 6 stiffness matrix about the action point, probed at the run's final state.
+
+With ``outputs.cap_stiffness`` the run models the whole foundation with a face action for
+every component (:mod:`~pilegroup.studies.run.cap_loads`); after its last stage each of the
+six actions about the action point is increased in turn by a small amount, one undrained step
+(``dt = 0``: the short-term response, as for traffic and braking) is solved from the
+committed state, the face's motion at the point is read (:class:`~pilegroup.studies.run.
+section_probe.CapMotion`) and the step is rolled back. The six motions per unit action are the
+flexibility matrix's columns; its inverse is the tangent stiffness matrix ``K`` (kN/m, kN/rad,
+kN m/m, kN m/rad) that a superstructure model takes as the foundation's spring. Without a cap it
+is the single pile head's matrix.
+
+``cap_stiffness.csv``: ``action,ux_m,uy_m,uz_m,rx_rad,ry_rad,rz_rad``: row ``Fx`` .. ``Mz``
+holds the actions per unit motion, ``K[i, j] = dF_i / du_j``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+from pilegroup.errors import SolverError
+from pilegroup.fileio import write_text_atomic
+from pilegroup.model import Scenario
+from pilegroup.model.actions import COMPONENTS, transfer
+from pilegroup.solver import BiotProblem, SolverStage
+from pilegroup.studies.results.tables import CAP_MOTION_CSV, COLUMNS
+from pilegroup.studies.run.cap_loads import first_slot
+from pilegroup.studies.run.section_probe import CapMotion
+
+STIFFNESS_CSV = "cap_stiffness.csv"
+#: Probe size: this fraction of the vertical load (at least 1 kN); moments times the face size.
+PROBE_FRACTION = 1e-2
+
+
+def probe_sizes(sc: Scenario) -> np.ndarray:
+    """The six probe increments (kN, kN m)."""
+    force = max(PROBE_FRACTION * sc.total_cap_load(), 1.0)
+    lever = max(sc.cap.size_x_m, sc.cap.size_y_m) if sc.cap is not None else sc.piles.diameter_m
+    return np.array([force] * 3 + [force * lever] * 3)
+
+
+def cap_stiffness(sc: Scenario, pb: BiotProblem, motion: CapMotion,
+                  stages: Sequence[SolverStage]) -> np.ndarray:
+    """``K`` (6 x 6) about the action point at ``pb``'s committed state (collective)."""
+    g = np.array(next((st.ground for st in reversed(stages) if st.ground), ()), dtype=float)
+    slot, lam = first_slot(sc), pb.load_factor
+    P, C = sc.action_point(), sc.load_centre()
+    m0 = motion()
+    flex = np.zeros((6, 6))
+    for k, size in enumerate(probe_sizes(sc)):
+        probe = g.copy()
+        probe[slot: slot + 6] += transfer(np.eye(6)[k] * size, P, C)
+        pb.set_ground(probe)
+        info = pb.solve_step(0.0, lam)
+        if not info.converged:
+            pb.rollback()
+            raise SolverError(f"cap stiffness: the {COMPONENTS[k]} probe of {size:g} did not "
+                              f"converge: {info.message}")
+        flex[:, k] = (motion() - m0) / size
+        pb.rollback()
+    pb.set_ground(tuple(g))
+    return np.linalg.inv(flex)
+
+
+def write_cap_stiffness(path: Path, K: np.ndarray) -> None:
+    """``cap_stiffness.csv`` (module docstring); call on one rank."""
+    head = ",".join(("action", *COLUMNS[CAP_MOTION_CSV][1:]))
+    rows = [f"{c}," + ",".join(f"{v:.9g}" for v in row) for c, row in zip(COMPONENTS, K,
+                                                                          strict=True)]
+    write_text_atomic(path, "\n".join([head, *rows]) + "\n")
+
+
+__all__ = ["STIFFNESS_CSV", "cap_stiffness", "probe_sizes", "write_cap_stiffness"]
