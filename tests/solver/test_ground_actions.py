@@ -90,8 +90,9 @@ def test_ground_amplitudes_must_cover_every_action():
     pb = _column(mat, [PressureBC(groups.GROUND, value=-GAMMA_W, action=1)])
     with pytest.raises(SolverInputError, match="ground amplitudes: 1 given"):
         pb.set_ground((1.0,))
-    with pytest.raises(SolverInputError, match="kind 'ground'"):
-        SolverStage("x", "load", 1.0, ground=(1.0,))
+    with pytest.raises(SolverInputError, match="kind 'ground' or 'load'"):
+        SolverStage("x", "consolidation", 1.0, ground=(1.0,))
+    assert SolverStage("x", "load", 1.0, ground=(1.0,)).ground == (1.0,)  # cap actions
 
 
 def test_consolidation_surcharge_case_within_its_tolerance():
