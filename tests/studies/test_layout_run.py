@@ -22,10 +22,15 @@ import csv
 import json
 import math
 
+import numpy as np
 import pytest
 
+from pilegroup.errors import StepFailure
 from pilegroup.model import load_scenario
+from pilegroup.model.loader import parse_override
+from pilegroup.studies.run.capacity_probe import CapacityProbe
 from pilegroup.studies.run.job import run_scenario
+from pilegroup.studies.run.pipeline import check_runaway, installation
 
 LOAD_KN = 500.0
 PILES = """[piles]
@@ -135,3 +140,41 @@ def test_under_a_cap_the_stiffer_pile_takes_more_and_the_cap_tilts(runs):
     plane = [r for r in _rows(runs["capped"] / "neutral_plane.csv") if r["t_day"] == "2"]
     w = {int(r["pile"]): float(r["head_settlement_m"]) for r in plane}
     assert w[2] > w[1] > 0.0
+
+
+# ---------------------------------------------------------------- per-pile rules, no run
+def _scenario(small_pile_source, tmp_path, sets=()):
+    f = tmp_path / "two.toml"
+    f.write_text(layout_text(small_pile_source, cap=False))
+    return load_scenario(f, dict(parse_override(kv) for kv in sets))
+
+
+def test_installation_cavities_have_each_piles_radius_and_toe(small_pile_source, tmp_path):
+    sets = ("piles.installation={excess_pore_pressure_ratio = 0.3, radius_ratio = 8.0}",)
+    ins = installation(_scenario(small_pile_source, tmp_path, sets))
+    assert ins.piles == ((-1.5, 0.0, 0.5, -12.0), (1.5, 0.0, 0.3, -8.0))
+
+
+def test_runaway_is_measured_against_the_smallest_diameter(small_pile_source, tmp_path):
+    sc = _scenario(small_pile_source, tmp_path)
+    check_runaway(sc, 0.59, 1.0, 1.0, "loading")
+    with pytest.raises(StepFailure, match="exceeds the smallest pile diameter 0.6 m"):
+        check_runaway(sc, 0.61, 1.0, 1.0, "loading")
+
+
+def test_capacity_criteria_per_pile_diameter_and_the_group_smallest(small_pile_source,
+                                                                      tmp_path):
+    sets = ('stages[2].kind="capacity"', "stages[2].max_load_kN=5000.0",
+            "stages[2].duration_day=1.5")
+    probe = CapacityProbe(_scenario(small_pile_source, tmp_path, sets), None, None, None,
+                          tmp_path)
+    w = np.linspace(0.0, 0.2, 11)  # the same settlement curve for the group and both piles
+    probe.points = [[t, t, 1000.0 * t, wi, [800.0 * t, 200.0 * t], [wi, wi]]
+                    for t, wi in zip(np.linspace(0.0, 1.0, 11), w, strict=True)]
+    res = probe.result()
+    limits = [p["settlement_10pct_d"]["settlement_m"] for p in res["piles"]]
+    assert limits == pytest.approx([0.1, 0.06])
+    assert res["group"]["settlement_10pct_d"]["settlement_m"] == pytest.approx(0.06)
+    assert res["settlement_criterion_m"] == pytest.approx(0.06)
+    assert res["piles"][0]["settlement_10pct_d"]["load_kN"] == pytest.approx(400.0)
+    assert res["piles"][1]["settlement_10pct_d"]["load_kN"] == pytest.approx(60.0)
