@@ -332,10 +332,9 @@ class Piles:
             raise ScenarioError(later, f"{n} entries", "give exactly one of grid (with"
                                 " spacing_m), positions_m or layout; here also "
                                 + " and ".join(given[:-1]))
-        if self.spacing_m is not None and self.grid is None:
-            key = given[0] if given else "spacing_m"
-            raise ScenarioError(key, "with spacing_m", "spacing_m goes with grid only: give"
-                                " grid + spacing_m, positions_m or layout")
+        if self.spacing_m is not None and self.grid is None and given:
+            raise ScenarioError("spacing_m", list(self.spacing_m),
+                                f"goes with grid only: leave it out with {given[0]}", "m")
         if self.layout is not None:
             if len(self.layout) == 0:
                 raise ScenarioError("layout", [], "must list at least one pile")
@@ -359,8 +358,7 @@ class Piles:
             else:
                 for i, v in enumerate(self.spacing_m):
                     require_positive(f"spacing_m[{i}]", v, "m")
-        n = (len(self.layout) if self.layout is not None else len(self.positions_m)
-             if self.positions_m is not None else math.prod(self.grid))  # type: ignore[arg-type]
+        n = self.count
         if n > MAX_PILES:
             raise ScenarioError(self._layout_key(), n,
                                 f"at most {MAX_PILES} piles (the mesh names pile_1 .. "
@@ -389,9 +387,8 @@ class Piles:
                 dist = math.dist(xy[i], xy[j])
                 least = 0.5 * (d[i] + d[j])
                 if dist < least:
-                    key = self._layout_key()
-                    key = f"layout[{i}]" if key == "layout" else \
-                        "positions_m" if key == "positions_m" else "spacing_m"
+                    key = {"layout": f"layout[{i}]", "positions_m": "positions_m",
+                           "grid": "spacing_m"}[self._layout_key()]
                     raise ScenarioError(
                         key, [list(xy[j]), list(xy[i])],
                         f"piles {j + 1} and {i + 1} overlap: centre distance {dist:g} m must be"

@@ -8,6 +8,8 @@ import math
 import tomllib
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from pilegroup.geometry.adapter import geometry_spec, resolve_geometry
 from pilegroup.model import ScenarioError, bundled_text, scenario_from_dict
@@ -156,13 +158,14 @@ def test_the_shorthands_still_need_both_values(key):
 @pytest.mark.parametrize(("piles", "key", "words"), [
     ({"grid": [2, 1], "spacing_m": [4.0, 4.0]}, "piles.layout", "here also grid"),
     ({"positions_m": [[-2.0, 0.0], [2.0, 0.0]]}, "piles.layout", "here also positions_m"),
-    ({"spacing_m": [4.0, 4.0]}, "piles.layout", "spacing_m goes with grid only"),
+    ({"spacing_m": [4.0, 4.0]}, "piles.spacing_m", "goes with grid only: leave it out with"
+                                                   " layout"),
 ])
 def test_exactly_one_of_grid_positions_and_layout(piles, key, words):
     err = _error(_doc(TWO, **piles))
     assert err.key == key and words in str(err)
-    assert "exactly one of grid (with spacing_m), positions_m or layout" in str(err) \
-        or "spacing_m goes with grid only" in str(err)
+    assert "spacing_m" in piles or \
+        "give exactly one of grid (with spacing_m), positions_m or layout" in str(err)
 
 
 def test_no_layout_at_all_names_the_three_ways():
@@ -266,3 +269,28 @@ def test_mirror_images_of_different_diameter_break_the_symmetry():
         same.piles, layout=(same.piles.layout[0], dataclasses.replace(
             same.piles.layout[1], length_in_soil_m=12.0))))
     assert resolve_geometry(equal).symmetry == "quarter"
+
+
+ODD = [0, -1.0, 0.3, 1e300, math.nan, math.inf, "1.0", True, [1.0], {"a": 1}, None]
+
+
+@settings(max_examples=300, deadline=None)
+@given(entry=st.integers(0, 2), key=st.sampled_from(["x_m", "y_m", "diameter_m",
+                                                    "length_in_soil_m", "rake_deg", "z_m"]),
+       value=st.sampled_from(ODD),
+       top=st.sampled_from([None, (0.8, 10.0), (-0.8, 10.0), (0.8, "x")]))
+def test_mutated_layouts_load_or_raise_one_scenario_error(entry, key, value, top):
+    layout = [dict(TWO[0]), dict(TWO[1]), {"x_m": 0.0, "y_m": 3.0, "diameter_m": 0.8,
+                                           "length_in_soil_m": 10.0}]
+    if value is None:
+        layout[entry].pop(key, None)
+    else:
+        layout[entry][key] = value
+    piles = {} if top is None else {"diameter_m": top[0], "length_in_soil_m": top[1]}
+    try:
+        sc = scenario_from_dict(_doc(layout, **piles))
+    except ScenarioError as exc:
+        assert exc.key.startswith(("piles", "numerics", "outputs", "layers")) and exc.allowed
+    else:
+        assert len(sc.piles.diameters) == len(sc.piles.lengths) == sc.piles.count == 3
+        assert all(d > 0 for d in sc.piles.diameters) and max(sc.piles.lengths) < 20.0
