@@ -18,7 +18,11 @@ from pilegroup.model.actions import ANTISYMMETRIC, COMPONENTS
 
 
 def _full_spec(sc: Scenario, mesh_size: float | None) -> spec.GeometrySpec:
-    """The whole model of scenario ``sc`` (``mesh_size`` overrides h, m)."""
+    """The whole model of scenario ``sc`` (``mesh_size`` overrides h, m).
+
+    Every pile keeps its own diameter and length in soil (``sc.piles.diameters``,
+    ``sc.piles.lengths``) and the scenario's numbering; the embedment is the same for all.
+    """
     m = sc.numerics.mesh
     sizing = spec.MeshSizing(
         h_pile=m.size_m if mesh_size is None else mesh_size,
@@ -39,8 +43,8 @@ def _full_spec(sc: Scenario, mesh_size: float | None) -> spec.GeometrySpec:
     return spec.GeometrySpec(
         block=spec.BlockSpec(sc.site.size_x_m, sc.site.size_y_m, sc.site.depth_m),
         layers=tuple(spec.LayerSpec(lay.name, lay.thickness_m) for lay in sc.layers),
-        piles=tuple(spec.PileSpec(x, y, p.diameter_m, p.length_in_soil_m, p.embedment_m)
-                    for x, y in p.xy),
+        piles=tuple(spec.PileSpec(x, y, d, length, p.embedment_m)
+                    for (x, y), d, length in zip(p.xy, p.diameters, p.lengths, strict=True)),
         cap=cap,
         sizing=sizing,
     )

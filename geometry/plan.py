@@ -2,12 +2,14 @@
 
 The structured region (the cap outline, or the pile circles' bounding box plus
 ``near_field_margin`` without a cap) is cut into a rectilinear grid of cells, one per pile, with
-cell edges half-way between pile rows and columns. Each pile cell is an o-grid: inside the pile
+cell edges between pile rows and columns (half-way between equal piles; a thicker pile gets
+the larger share of the gap to a thinner one). Each pile cell is an o-grid: inside the pile
 an inner square plus four curved blocks, outside it four blocks from the circle to the cell
 sides; every block is transfinite, so pile cross-sections are structured.
-``N = max(n_circ_min, 4 ceil(pi d / (4 h)))`` edges run around each circle and ``N / 4`` along
-every cell side; the radial edges next to the pile start at ``h`` and grow geometrically towards
-the cell side (:mod:`pilegroup.geometry.plan_cells` cuts cells at mirror planes,
+``N = max(n_circ_min, 4 ceil(pi d / (4 h)))`` edges (``d`` the largest diameter) run around
+every circle, whatever its diameter, and ``N / 4`` along every cell side; the radial edges
+next to the pile start at ``h`` and grow geometrically towards the cell side
+(:mod:`pilegroup.geometry.plan_cells` cuts cells at mirror planes,
 :mod:`pilegroup.geometry.far_field` meshes the rest of the plan).
 
 :class:`PlanView` records everything first and emits it into the gmsh built-in "geo" kernel at
@@ -282,21 +284,37 @@ class PlanView:
         return out
 
 
-def _breaks(vals: list[float], lo: float, hi: float) -> list[float]:
-    """Cell edges from ``lo`` to ``hi``: half-way between the distinct values of ``vals``."""
-    u = sorted(set(round(v, 9) for v in vals))
-    return [lo, *((a + c) / 2 for a, c in zip(u[:-1], u[1:], strict=True)), hi]
+def _breaks(piles: tuple[PileSpec, ...], axis: str, lo: float, hi: float) -> list[float]:
+    """Cell edges along ``axis`` ("x" or "y") from ``lo`` to ``hi``, between the pile rows.
+
+    Between two neighbouring rows (distinct coordinates ``a < c``) whose largest radii are
+    ``ra`` and ``rc``: half-way when the radii are equal, else where the gap between the
+    piles' surfaces, ``c - a - ra - rc``, is shared in proportion to the radii, so that a
+    thick pile beside a thin one keeps the same fraction of its radius to the cell edge.
+    """
+    radius: dict[float, float] = {}
+    for p in piles:
+        v = round(p.x if axis == "x" else p.y, 9)
+        radius[v] = max(radius.get(v, 0.0), p.radius)
+    u = sorted(radius)
+    edges = []
+    for a, c in zip(u[:-1], u[1:], strict=True):
+        ra, rc = radius[a], radius[c]
+        edges.append((a + c) / 2 if ra == rc else a + ra + (c - a - ra - rc) * ra / (ra + rc))
+    return [lo, *edges, hi]
 
 
 def cell_grid(spec: GeometrySpec) -> tuple[list[float], list[float], CellPiles]:
     """Cell edges in x and y of the structured region and the pile of each pile cell.
 
+    The edges lie between the pile rows and columns (:func:`_breaks`: half-way between equal
+    piles, in proportion to the radii between piles of different diameters).
     Raises :class:`~pilegroup.errors.ScenarioError` (exit code 2) if two piles share a cell or
     a pile leaves less than 0.2 x its radius to its cell edge.
     """
     x0, x1, y0, y1 = spec.structured_region()
-    xb = _breaks([p.x for p in spec.piles], x0, x1)
-    yb = _breaks([p.y for p in spec.piles], y0, y1)
+    xb = _breaks(spec.piles, "x", x0, x1)
+    yb = _breaks(spec.piles, "y", y0, y1)
     cell_pile: CellPiles = {}
     for i, p in enumerate(spec.piles):
         ix = int(np.searchsorted(xb, p.x)) - 1

@@ -19,11 +19,19 @@ from pilegroup.model.analysis import (
 )
 from pilegroup.model.loader import BUNDLED, bundled_text, load_scenario, scenario_from_dict
 from pilegroup.model.scenario import Scenario
-from pilegroup.model.site import Cap, InterfaceParams, Layer, Piles, Site, Structure
+from pilegroup.model.site import (
+    Cap,
+    InterfaceParams,
+    Layer,
+    LayoutPile,
+    Piles,
+    Site,
+    Structure,
+)
 
 __all__ = [
     "BUNDLED", "Cap", "ConvergenceError", "InterfaceOptions", "InterfaceParams", "Layer",
-    "LinearSolver", "MeshOptions", "Numerics", "Outputs", "PilegroupError", "Piles", "Scenario",
-    "ScenarioError", "Site", "Soil", "Stage", "Structure", "Time", "TimeStepping",
+    "LayoutPile", "LinearSolver", "MeshOptions", "Numerics", "Outputs", "PilegroupError", "Piles",
+    "Scenario", "ScenarioError", "Site", "Soil", "Stage", "Structure", "Time", "TimeStepping",
     "bundled_text", "load_scenario", "scenario_from_dict",
 ]

@@ -33,6 +33,8 @@ _K = ("impervious clay to clean gravel, Terzaghi & Peck: 1e-6 to 1e3 m/day, with
       "below for practically undrained studies")
 _DZ = "1 cm resolves any layer the model accepts; 100 m exceeds any layer or block depth"
 _DT = "1e-9 day (0.1 ms) to time.end_day's limit"
+_PILE_D = Bound(0.1, 5.0, "m", "bored and driven piles: micropiles 0.1 m to large bored piles 5 m")
+_PILE_L = Bound(1.0, 150.0, "m", "bored and driven piles in practice: up to ~150 m")
 
 #: Every bounded scenario key -> its range.
 BOUNDS: dict[str, Bound] = {
@@ -66,10 +68,10 @@ BOUNDS: dict[str, Bound] = {
     "layers.interface.n": Bound(0.0, 2.0, "-", "Clough-Duncan exponents ~0.2-1 (paper: 0.28-0.52)"),
     "layers.interface.eta_MPa_day": Bound(1.0e-3, 1.0e6, "MPa·day/m",
                                           "paper Table 1: 6-53; four decades either side"),
-    "piles.diameter_m": Bound(0.1, 5.0, "m",
-                              "bored and driven piles: micropiles 0.1 m to large bored piles 5 m"),
-    "piles.length_in_soil_m": Bound(1.0, 150.0, "m",
-                                    "bored and driven piles in practice: up to ~150 m"),
+    "piles.diameter_m": _PILE_D,
+    "piles.length_in_soil_m": _PILE_L,
+    "piles.layout.diameter_m": _PILE_D,
+    "piles.layout.length_in_soil_m": _PILE_L,
     "cap.size_x_m": Bound(0.1, 2000.0, "m", "at least a pile diameter; at most the block"),
     "cap.size_y_m": Bound(0.1, 2000.0, "m", "at least a pile diameter; at most the block"),
     "cap.thickness_m": Bound(0.2, 20.0, "m",

@@ -2,7 +2,9 @@
 
 The loader walks the dataclass type hints: unknown keys, missing keys and wrong types are
 rejected with the dotted key path (``layers[3].E_MPa``); range rules live in the dataclasses'
-``__post_init__`` and get the same path prefixed here.
+``__post_init__`` and get the same path prefixed here. A dataclass with a classmethod
+``unknown_key_message(key)`` says itself what is wrong with an unknown key (a pile layout entry
+rejects a rake: :class:`~pilegroup.model.site.LayoutPile`).
 """
 
 from __future__ import annotations
@@ -112,7 +114,8 @@ def build_dataclass[T](cls: type[T], data: object, key: str = "") -> T:
     prefix = f"{key}." if key else ""
     for k in data:
         if k not in fields:
-            raise ScenarioError(f"{prefix}{k}", data[k],
+            special = getattr(cls, "unknown_key_message", None)
+            raise ScenarioError(f"{prefix}{k}", data[k], special(str(k)) if special else
                                 f"unknown key; allowed keys: {', '.join(fields)}")
     kwargs = {}
     for name, f in fields.items():

@@ -3,13 +3,14 @@
 The mesh is plan quads extruded down through the layers (docs/geometry.md), so the count is
 (plan quads) x (element layers), each estimated from the sizing keys of ``numerics.mesh``:
 
-* plan: around each pile the element size grows from ``h_eff = min(size_m, pi d /
-  n_circ_min)`` by the factor ``growth`` per element up to ``far_field_size_m`` (``h_far``);
-  integrating ``1 / size^2`` over that graded annulus gives ``2 pi R / a (1/h_eff - 1/h_far) +
-  2 pi / a^2 (ln(h_far/h_eff) + h_eff/h_far - 1)`` quads per pile (``a = growth - 1``), and the
-  rest of the block holds ``area / h_far^2``;
-* vertical: the same graded integral of ``1 / dz`` from the ground surface and the pile toes,
-  plus ``min_layer_divisions + 1`` per slab (rounding up per layer, toe cut and cap).
+* plan: around each pile (diameter ``d``) the element size grows from ``h_eff = min(size_m,
+  pi d / n_circ_min)`` by the factor ``growth`` per element up to ``far_field_size_m``
+  (``h_far``); integrating ``1 / size^2`` over that graded annulus gives ``2 pi R / a
+  (1/h_eff - 1/h_far) + 2 pi / a^2 (ln(h_far/h_eff) + h_eff/h_far - 1)`` quads per pile
+  (``a = growth - 1``), and the rest of the block holds ``area / h_far^2``;
+* vertical: the same graded integral of ``1 / dz`` from the ground surface and the pile toes
+  (every distinct toe level), plus ``min_layer_divisions + 1`` per slab (rounding up per
+  layer, toe cut and cap).
 
 The product times :data:`SAFETY` is above the real cell count of the whole model by 1.3-3x
 for the bundled scenarios and the benchmark meshes (h = 0.1-1 m; ``tests/model/test_fuzz.py``
@@ -20,6 +21,7 @@ checks the bound on meshes); a symmetry-reduced model has a half or a quarter of
 from __future__ import annotations
 
 import math
+from collections import Counter
 from typing import Protocol
 
 from pilegroup.model.analysis import Numerics
@@ -62,25 +64,44 @@ def graded_count(length: float, start: float, cap: float, growth: float) -> floa
 
 
 def plan_quads(sc: EstimatedScenario) -> float:
-    """Estimated plan quads of the whole block (no symmetry reduction)."""
+    """Estimated plan quads of the whole block (no symmetry reduction).
+
+    Every pile circle has the same number of edges, set by the thickest pile (the o-grid cells
+    share their sides): a thinner pile's first element is ``h_eff`` scaled by its diameter
+    over the largest one.
+    """
     m = sc.numerics.mesh
-    d = sc.piles.diameter_m
     h_far = max(m.far_field_size_m, m.size_m)
-    h = min(m.size_m, math.pi * d / m.n_circ_min, h_far)
     a = m.growth - 1.0
-    per_pile = (math.pi * d / a * (1.0 / h - 1.0 / h_far)
-                + 2.0 * math.pi / a ** 2 * (math.log(h_far / h) + h / h_far - 1.0))
-    return sc.piles.count * per_pile + sc.site.size_x_m * sc.site.size_y_m / h_far ** 2
+    d_max = max(sc.piles.diameters)
+    total = 0.0
+    for d, count in Counter(sc.piles.diameters).items():
+        h = min(m.size_m, math.pi * d / m.n_circ_min, h_far)
+        if d < d_max:
+            h = min(h, m.size_m * d / d_max)
+        per_pile = (math.pi * d / a * (1.0 / h - 1.0 / h_far)
+                    + 2.0 * math.pi / a ** 2 * (math.log(h_far / h) + h / h_far - 1.0))
+        total += count * per_pile
+    return total + sc.site.size_x_m * sc.site.size_y_m / h_far ** 2
 
 
 def element_layers(sc: EstimatedScenario) -> float:
-    """Estimated element layers of the extrusion (soil and cap)."""
+    """Estimated element layers of the extrusion (soil and cap).
+
+    The column is graded from the ground surface and from every distinct toe level: each
+    stretch between two of these levels is refined from both of its ends.
+    """
     m = sc.numerics.mesh
-    toe, depth = sc.piles.length_in_soil_m, sc.site.depth_m
-    n = (graded_count(toe / 2, m.dz_surface_m, m.dz_max_m, m.dz_growth)
-         + graded_count(toe / 2, m.dz_toe_m, m.dz_max_m, m.dz_growth)
-         + graded_count(depth - toe, m.dz_toe_m, m.dz_max_deep_m, m.dz_growth))
-    slabs = len(sc.layers) + 1
+    depth = sc.site.depth_m
+    toes = sorted(set(sc.piles.lengths))
+    n = 0.0
+    top, first = 0.0, m.dz_surface_m
+    for toe in toes:
+        n += (graded_count((toe - top) / 2, first, m.dz_max_m, m.dz_growth)
+              + graded_count((toe - top) / 2, m.dz_toe_m, m.dz_max_m, m.dz_growth))
+        top, first = toe, m.dz_toe_m
+    n += graded_count(depth - top, m.dz_toe_m, m.dz_max_deep_m, m.dz_growth)
+    slabs = len(sc.layers) + len(toes)
     if sc.cap is not None:
         n += sc.cap.thickness_m / m.dz_cap_m
         slabs += 2

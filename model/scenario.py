@@ -62,7 +62,11 @@ class Scenario:
 
     # ---- rules across the parts, in the order the messages report them ----
     def _check_layer_stack(self) -> None:
-        """The layers reach below the pile toes and fill the block (or the last one does)."""
+        """The layers reach below the pile toes and fill the block (or the last one does).
+
+        The deepest toe (the longest pile) decides: it ends above the block bottom with room
+        for one element below it, and the layer stack reaches it.
+        """
         if not self.layers:
             raise ScenarioError("layers", [], "must list at least one layer")
         for i, layer in enumerate(self.layers[:-1]):
@@ -70,14 +74,16 @@ class Scenario:
                 raise ScenarioError(f"layers[{i}].thickness_m", None,
                                     "missing: only the last layer may omit its thickness", "m")
         depth = self.site.depth_m
-        toe = self.piles.length_in_soil_m
+        lengths = self.piles.lengths
+        toe = max(lengths)
+        key = self.piles.key_of(lengths.index(toe) + 1, "length_in_soil_m")
         if toe >= depth:
-            raise ScenarioError("piles.length_in_soil_m", toe,
+            raise ScenarioError(key, toe,
                                 f"must be < site.depth_m = {depth:g} (pile longer than the block)",
                                 "m")
         room = self.numerics.mesh.dz_toe_m
         if depth - toe < room:
-            raise ScenarioError("piles.length_in_soil_m", toe,
+            raise ScenarioError(key, toe,
                                 f"must leave room for one element below the toes: site.depth_m"
                                 f" - length >= numerics.mesh.dz_toe_m = {room:g}", "m")
         given = sum(layer.thickness_m or 0.0 for layer in self.layers)
@@ -90,7 +96,8 @@ class Scenario:
         if given < toe:
             raise ScenarioError("layers", f"total thickness {given:g}",
                                 f"the layer stack must reach the pile toe at {toe:g} m depth"
-                                " (or omit the last layer's thickness to extend it to the"
+                                + (" (the longest pile's)" if min(lengths) < toe else "")
+                                + " (or omit the last layer's thickness to extend it to the"
                                 " bottom)", "m")
         if abs(given - depth) > 1e-9 * depth:
             raise ScenarioError("layers", f"total thickness {given:g}",
@@ -104,8 +111,8 @@ class Scenario:
         (``pilegroup.geometry.plan.cell_grid``) needs that room.
         """
         half_x, half_y = self.site.size_x_m / 2, self.site.size_y_m / 2
-        r = self.piles.diameter_m / 2
-        for i, (x, y) in enumerate(self.piles.xy):
+        for i, ((x, y), d) in enumerate(zip(self.piles.xy, self.piles.diameters, strict=True)):
+            r = d / 2
             if abs(x) + r > half_x or abs(y) + r > half_y:
                 raise ScenarioError(f"piles[{i + 1}] position", [x, y],
                                     "pile lies outside the soil block", "m")
@@ -114,7 +121,7 @@ class Scenario:
             clear = min(self.cap.size_x_m / 2 - abs(x), self.cap.size_y_m / 2 - abs(y)) - r
             if clear < -1e-12:
                 raise ScenarioError(f"piles[{i + 1}] position", [x, y],
-                                    f"pile (diameter {self.piles.diameter_m:g} m) lies outside the"
+                                    f"pile (diameter {d:g} m) lies outside the"
                                     f" cap ({self.cap.size_x_m:g} x {self.cap.size_y_m:g} m)", "m")
             if clear < 0.2 * r:
                 raise ScenarioError(f"piles[{i + 1}] position", [x, y],
@@ -251,26 +258,32 @@ class Scenario:
                                     " as a body of their own); with tied piles: 'auto', 'direct',"
                                     " 'direct_reuse' or 'fieldsplit_gamg'")
             return
+        toe = max(self.piles.lengths)
         for i, layer in enumerate(self.layers):
-            if layer.interface is None and self.layer_top(i) < self.piles.length_in_soil_m:
+            if layer.interface is None and self.layer_top(i) < toe:
                 raise ScenarioError(f"layers[{i}].interface", None,
                                     f"missing: the piles cross layer {layer.name!r} and"
                                     f" interface.mode = {self.interface.mode!r}")
 
     def _check_gauges(self) -> None:
-        """Gauge sections lie on the piles."""
-        toe = self.piles.length_in_soil_m
+        """Gauge sections lie on the piles: on every pile, so above the shortest one's toe."""
+        toe = min(self.piles.lengths)
         for i, z in enumerate(self.outputs.gauge_depths_m):
             if z > toe:
                 raise ScenarioError(f"outputs.gauge_depths_m[{i}]", z,
-                                    f"must be <= the pile length in soil {toe:g}", "m")
+                                    f"must be <= the (shortest) pile length in soil {toe:g}:"
+                                    " every pile is gauged", "m")
 
     def _check_numerics(self) -> None:
-        """Mesh size against the piles, smallest step against the end, cell-count estimate."""
-        m, d = self.numerics.mesh, self.piles.diameter_m
+        """Mesh size against the piles, smallest step against the end, cell-count estimate.
+
+        The mesh size resolves the thinnest pile: at most 5 x the smallest diameter.
+        """
+        m, d = self.numerics.mesh, min(self.piles.diameters)
         if m.size_m > 5.0 * d:
+            key = self.piles.key_of(self.piles.diameters.index(d) + 1, "diameter_m")
             raise ScenarioError("numerics.mesh.size_m", m.size_m,
-                                f"must be <= 5 x piles.diameter_m = {5.0 * d:g} (elements much"
+                                f"must be <= 5 x {key} = {5.0 * d:g} (elements much"
                                 " larger than the pile do not resolve it)", "m")
         dt_min = self.numerics.time.dt_min_day
         if dt_min > self.time.end_day:

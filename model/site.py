@@ -14,6 +14,7 @@ formula on floats (no numpy, no law), so that the formula is written once.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -233,38 +234,111 @@ class Installation:
         check_bound("piles.installation.radius_ratio", self.radius_ratio)
 
 
-@dataclass(frozen=True)
-class Piles:
-    """The piles: a regular grid centred on the cap, or explicit positions.
+#: Words that mark a key of a layout entry as a rake (batter) of the pile: rejected with their
+#: own message, since every pile of the model is vertical.
+RAKE_WORDS = ("rake", "batter", "inclin", "tilt", "angle", "azimuth")
 
-    Either ``grid`` [nx, ny] with ``spacing_m`` [sx, sy], or ``positions_m`` [[x, y], ...] (m,
-    plan coordinates).
+
+@dataclass(frozen=True)
+class LayoutPile:
+    """One entry of ``piles.layout``: a vertical pile at ``(x_m, y_m)`` (m, plan coordinates).
+
+    ``diameter_m`` and ``length_in_soil_m`` (m) are the pile's own; an omitted one is the
+    ``[piles]``-level value of the same name. Raked (battered) piles are not modelled: a key
+    giving a rake is rejected (:meth:`unknown_key_message`).
     """
 
-    diameter_m: float
-    length_in_soil_m: float
+    x_m: float
+    y_m: float
+    diameter_m: float | None = None
+    length_in_soil_m: float | None = None
+
+    def __post_init__(self) -> None:
+        require_finite("x_m", self.x_m, "m")
+        require_finite("y_m", self.y_m, "m")
+        if self.diameter_m is not None:
+            require_positive("diameter_m", self.diameter_m, "m")
+            check_bound("piles.layout.diameter_m", self.diameter_m)
+        if self.length_in_soil_m is not None:
+            require_positive("length_in_soil_m", self.length_in_soil_m, "m")
+            check_bound("piles.layout.length_in_soil_m", self.length_in_soil_m)
+
+    @classmethod
+    def unknown_key_message(cls, key: str) -> str:
+        """What the loader says of an unknown key ``key`` in a layout entry.
+
+        A key naming a rake or batter (:data:`RAKE_WORDS`, e.g. ``rake_deg``, ``batter``,
+        ``inclination_deg``) says that raked piles are not supported; any other says so too,
+        after the allowed keys, so that nobody reads a silently dropped key as a raked pile.
+        """
+        allowed = "allowed keys: " + ", ".join(f.name for f in dataclasses.fields(cls))
+        if any(w in key.lower() for w in RAKE_WORDS):
+            return (f"raked piles are not supported: every pile is vertical (no rake or batter"
+                    f" can be given); {allowed}")
+        return f"unknown key; {allowed} (vertical piles only: raked piles are not supported)"
+
+
+@dataclass(frozen=True)
+class Piles:
+    """The piles: a regular grid centred on the cap, explicit positions, or an explicit layout.
+
+    Exactly one of: ``grid`` [nx, ny] with ``spacing_m`` [sx, sy]; ``positions_m`` [[x, y],
+    ...] (m, plan coordinates); ``layout``, a list of :class:`LayoutPile` tables, each pile
+    with its own position and, optionally, its own diameter and length in soil. With ``grid``
+    or ``positions_m`` every pile has ``diameter_m`` and ``length_in_soil_m``; with ``layout``
+    these are the defaults of the entries that omit them (and may be left out when every entry
+    gives its own). The embedment in the cap is one for all piles.
+
+    Piles are numbered from 1 in the order :attr:`xy` lists them; :attr:`diameters` and
+    :attr:`lengths` are aligned with it. Two piles must not overlap: the distance between their
+    centres is at least the mean of their two diameters (their cross-sections may touch).
+    """
+
+    diameter_m: float | None = None
+    length_in_soil_m: float | None = None
     embedment_m: float = 0.0
     grid: tuple[int, int] | None = None
     spacing_m: tuple[float, float] | None = None
     positions_m: tuple[tuple[float, float], ...] | None = None
+    layout: tuple[LayoutPile, ...] | None = None
     installation: Installation | None = None
     """Installation pore pressures present at the start (None: wished in place, no excess)."""
 
     def __post_init__(self) -> None:
-        require_positive("diameter_m", self.diameter_m, "m")
-        check_bound("piles.diameter_m", self.diameter_m)
-        require_positive("length_in_soil_m", self.length_in_soil_m, "m")
-        check_bound("piles.length_in_soil_m", self.length_in_soil_m)
+        if self.diameter_m is not None:
+            require_positive("diameter_m", self.diameter_m, "m")
+            check_bound("piles.diameter_m", self.diameter_m)
+        if self.length_in_soil_m is not None:
+            require_positive("length_in_soil_m", self.length_in_soil_m, "m")
+            check_bound("piles.length_in_soil_m", self.length_in_soil_m)
         require_non_negative("embedment_m", self.embedment_m, "m")
         self._check_layout()
+        self._check_sizes()
         self._check_overlap()
 
+    def _layout_key(self) -> str:
+        """The key that places the piles: ``layout``, ``positions_m`` or ``grid``."""
+        if self.layout is not None:
+            return "layout"
+        return "positions_m" if self.positions_m is not None else "grid"
+
     def _check_layout(self) -> None:
-        """Either finite positions or a grid (with spacing when > 1 x 1), at most MAX_PILES."""
-        if self.positions_m is not None:
-            if self.grid is not None or self.spacing_m is not None:
-                raise ScenarioError("positions_m", list(self.positions_m),
-                                    "give either positions_m or grid + spacing_m, not both", "m")
+        """Exactly one of grid, positions_m and layout; finite positions; at most MAX_PILES."""
+        given = [k for k, v in (("grid", self.grid), ("positions_m", self.positions_m),
+                                ("layout", self.layout)) if v is not None]
+        if len(given) > 1:
+            later = given[-1]
+            n = len(getattr(self, later))
+            raise ScenarioError(later, f"{n} entries", "give exactly one of grid (with"
+                                " spacing_m), positions_m or layout; here also "
+                                + " and ".join(given[:-1]))
+        if self.spacing_m is not None and self.grid is None and given:
+            raise ScenarioError("spacing_m", list(self.spacing_m),
+                                f"goes with grid only: leave it out with {given[0]}", "m")
+        if self.layout is not None:
+            if len(self.layout) == 0:
+                raise ScenarioError("layout", [], "must list at least one pile")
+        elif self.positions_m is not None:
             if len(self.positions_m) == 0:
                 raise ScenarioError("positions_m", [], "must list at least one pile", "m")
             for i, xy in enumerate(self.positions_m):
@@ -273,40 +347,62 @@ class Piles:
         else:
             if self.grid is None:
                 raise ScenarioError("grid", None, "missing: give grid = [nx, ny] with spacing_m,"
-                                    " or positions_m")
+                                    " positions_m or layout")
             for i, v in enumerate(self.grid):
                 if v < 1:
                     raise ScenarioError(f"grid[{i}]", v, "must be an integer >= 1")
-            needs = any(v > 1 for v in self.grid)
             if self.spacing_m is None:
-                if needs:
+                if any(v > 1 for v in self.grid):
                     raise ScenarioError("spacing_m", None, "missing: required when grid > 1x1",
                                         "m")
             else:
                 for i, v in enumerate(self.spacing_m):
                     require_positive(f"spacing_m[{i}]", v, "m")
-        n = len(self.positions_m) if self.positions_m is not None else math.prod(self.grid)
+        n = self.count
         if n > MAX_PILES:
-            raise ScenarioError("positions_m" if self.positions_m is not None else "grid", n,
+            raise ScenarioError(self._layout_key(), n,
                                 f"at most {MAX_PILES} piles (the mesh names pile_1 .. "
                                 f"pile_{MAX_PILES})", "-")
 
+    def _check_sizes(self) -> None:
+        """Every pile has a diameter and a length: its own (layout) or the ``[piles]`` one."""
+        for key in ("diameter_m", "length_in_soil_m"):
+            if getattr(self, key) is not None:
+                continue
+            if self.layout is None:
+                raise ScenarioError(key, None, f"missing key; expected a number (with"
+                                    f" {self._layout_key()} every pile has this {key}; a layout"
+                                    " may give each pile its own)", "m")
+            for i, entry in enumerate(self.layout):
+                if getattr(entry, key) is None:
+                    raise ScenarioError(f"layout[{i}].{key}", None,
+                                        f"missing: give {key} in this entry, or piles.{key} as"
+                                        " the value of every entry that omits it", "m")
+
     def _check_overlap(self) -> None:
-        """No two pile cross-sections overlap."""
-        xy = self.xy
+        """No two pile cross-sections overlap: centre distance >= the mean of the diameters."""
+        xy, d = self.xy, self.diameters
         for i in range(len(xy)):
             for j in range(i):
                 dist = math.dist(xy[i], xy[j])
-                if dist < self.diameter_m:
+                least = 0.5 * (d[i] + d[j])
+                if dist < least:
+                    key = {"layout": f"layout[{i}]", "positions_m": "positions_m",
+                           "grid": "spacing_m"}[self._layout_key()]
                     raise ScenarioError(
-                        "positions_m" if self.positions_m is not None else "spacing_m",
-                        [list(xy[j]), list(xy[i])],
+                        key, [list(xy[j]), list(xy[i])],
                         f"piles {j + 1} and {i + 1} overlap: centre distance {dist:g} m must be"
-                        f" >= diameter_m = {self.diameter_m:g}", "m")
+                        f" >= the mean of their diameters ({d[j]:g} + {d[i]:g}) / 2 ="
+                        f" {least:g} m", "m")
 
     @property
     def xy(self) -> tuple[tuple[float, float], ...]:
-        """Plan positions (m) of every pile, numbered row by row (x fastest) from 1."""
+        """Plan positions (m) of every pile, numbered from 1.
+
+        In the order of ``layout`` or ``positions_m``; a grid row by row (x fastest).
+        """
+        if self.layout is not None:
+            return tuple((float(e.x_m), float(e.y_m)) for e in self.layout)
         if self.positions_m is not None:
             return tuple((float(x), float(y)) for x, y in self.positions_m)
         nx, ny = self.grid  # type: ignore[misc]
@@ -314,10 +410,41 @@ class Piles:
         return tuple(((i - (nx - 1) / 2) * sx, (j - (ny - 1) / 2) * sy)
                      for j in range(ny) for i in range(nx))
 
+    def _per_pile(self, key: str) -> tuple[float, ...]:
+        default = getattr(self, key)
+        if self.layout is None:
+            return (float(default),) * self.count
+        return tuple(float(default if getattr(e, key) is None else getattr(e, key))
+                     for e in self.layout)
+
+    @property
+    def diameters(self) -> tuple[float, ...]:
+        """Diameter (m) of every pile, aligned with :attr:`xy` (pile ``i`` at index ``i - 1``)."""
+        return self._per_pile("diameter_m")
+
+    @property
+    def lengths(self) -> tuple[float, ...]:
+        """Length in soil (m) of every pile, aligned with :attr:`xy`."""
+        return self._per_pile("length_in_soil_m")
+
+    def key_of(self, i: int, key: str) -> str:
+        """The scenario key that sets ``key`` of pile ``i`` (1-based), for messages.
+
+        ``key`` is ``diameter_m`` or ``length_in_soil_m``; the answer is
+        ``piles.layout[i - 1].<key>`` when that entry gives it, else ``piles.<key>``.
+        """
+        if self.layout is not None and getattr(self.layout[i - 1], key) is not None:
+            return f"piles.layout[{i - 1}].{key}"
+        return f"piles.{key}"
+
     @property
     def count(self) -> int:
         """Number of piles."""
-        return len(self.xy)
+        if self.layout is not None:
+            return len(self.layout)
+        if self.positions_m is not None:
+            return len(self.positions_m)
+        return math.prod(self.grid)  # type: ignore[arg-type]
 
 
 @dataclass(frozen=True)

@@ -392,7 +392,7 @@ def bench_stability(out_dir: str | Path = "out/bench_stability",
     scenario = write_text_atomic(out / "small_pile.toml", text)
     rows = []
     for name in names or list(cases):
-        rows.append(run_case(cases[name], scenario, out, ranks, timeout, sc.piles.diameter_m,
+        rows.append(run_case(cases[name], scenario, out, ranks, timeout, min(sc.piles.diameters),
                              extra_sets))
         print(json.dumps({k: rows[-1][k] for k in COLUMNS}), flush=True)
     header = (f"{time.strftime('%Y-%m-%d')}, {platform.node()} ({platform.machine()}); the "

@@ -56,7 +56,10 @@ class CapacityProbe:
         self.stage, self.pb, self.piles, self.settlement = st.name, pb, piles, settlement
         self.path = Path(out) / CAPACITY_CSV
         self.total = sc.total_cap_load()
-        self.d = sc.piles.diameter_m
+        #: every pile's diameter (m): the scale of its own settlement criterion
+        self.diameters = sc.piles.diameters
+        #: the group's scale: the smallest diameter (a group of equal piles: their diameter)
+        self.d = min(self.diameters)
         self.n = sc.piles.count
         self.ratio = st.plunging_stiffness_ratio or PLUNGING_STIFFNESS_RATIO
         self.single = st.single_pile_capacity_kN
@@ -115,8 +118,8 @@ class CapacityProbe:
         """The stop rule after an accepted step of the capacity stage.
 
         Raises :class:`CapacityReached` once the settlement exceeds
-        :data:`STOP_SETTLEMENT_PER_DIAMETER` pile diameters, or once both criteria are found on
-        the group's curve (nothing more to learn by loading further).
+        :data:`STOP_SETTLEMENT_PER_DIAMETER` pile diameters (the smallest one), or once both
+        criteria are found on the group's curve (nothing more to learn by loading further).
         """
         if stage != self.stage or not self.points:
             return
@@ -130,7 +133,13 @@ class CapacityProbe:
             raise CapacityReached("both criteria reached", t, lam)
 
     def group_criteria(self) -> dict[str, Any]:
-        """The criteria on the group's curve (cap load against cap settlement)."""
+        """The criteria on the group's curve (cap load against cap settlement).
+
+        The group's settlement criterion is 10 % of the smallest pile diameter: with piles of
+        different diameters the foundation has failed once its thinnest pile has (the cap
+        settles with all of them); each pile's own curve uses its own diameter
+        (:meth:`result`).
+        """
         c = self.curve()
         return capacity_criteria(np.array([p[2] for p in c]), np.array([p[3] for p in c]),
                                  self.d, self.ratio, self.end, self.total)
@@ -142,7 +151,8 @@ class CapacityProbe:
         piles = []
         for i in range(self.n):
             crit = capacity_criteria(np.array([p[4][i] for p in c]),
-                                     np.array([p[5][i] for p in c]), self.d, self.ratio)
+                                     np.array([p[5][i] for p in c]), self.diameters[i],
+                                     self.ratio)
             at = c[-1][4][i] if c else None
             piles.append({"pile": i + 1, "head_force_at_end_kN": at, **crit})
         return {
@@ -155,7 +165,8 @@ class CapacityProbe:
             "method": "load control; plunging where the tangent stiffness falls below the "
                       "ratio x the initial, or the last equilibrium where the stepper's "
                       "cut-backs find none (bracketed by the failed step's load); settlement "
-                      "criterion 10 % of the pile diameter (docs/model.md, Capacity)",
+                      "criterion 10 % of the pile diameter (each pile's own; the group: the "
+                      "smallest) (docs/model.md, Capacity)",
         }
 
     def finish(self, end: dict[str, Any] | None) -> dict[str, Any]:

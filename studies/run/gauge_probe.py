@@ -82,7 +82,7 @@ class GaugeProbe:
         self._layers = {i: self._element_layers(i) for i in piles.fraction}
         self.section = {i: self._section(i) for i in piles.fraction}
         for i, (A, U) in self.section.items():
-            d = sc.piles.diameter_m
+            d = sc.piles.diameters[i - 1]
             log.info("gauges, pile %d: meshed A = %.6g m^2 (circle %.6g), U = %.6g m (circle "
                      "%.6g)", i, A, math.pi * d * d / 4, U, math.pi * d)
         self.rows: list[str] = []

@@ -99,7 +99,7 @@ class GroundProbe:
         """
         if k not in self._shaft_p:
             x, y = self.piles.xy[k - 1]
-            rho = 0.5 * self.piles.d * 1.001 / np.sqrt(2.0)
+            rho = 0.5 * self.piles.diameters[k - 1] * 1.001 / np.sqrt(2.0)
             self._shaft_p[k] = PointSampler(self._p, np.column_stack(
                 [np.full(depth.size, x + rho), np.full(depth.size, y + rho), -depth]))
         return self._shaft_p[k]()

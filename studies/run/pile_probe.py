@@ -15,7 +15,7 @@ minus adjacent soil settlement (positive = the pile moves down relative to the s
   the nodal interface state (``shear_traction_vertical``, ``slip_vertical``) over the ring of
   interface nodes at each node level; the stations are the node levels. Tied piles have no
   slip: the relative displacement is 0 and the friction is ``(dN/dz) / (pi d)`` at the element
-  layer mid-heights.
+  layer mid-heights (``d`` the pile's own diameter).
 * Layer means per pile and soil layer: area-weighted over the layer's shaft interface nodes of
   that pile; the centre pile after every step (``layer_history.csv``), every pile at the output
   times (``interface_layers.csv``). Normal traction: effective, kPa, tension positive;
@@ -68,7 +68,7 @@ class PileProbe:
     :meth:`record_step` after every accepted step adds the centre pile's layer means.
 
     Args:
-        sc: the scenario (pile positions, diameter, layers).
+        sc: the scenario (pile positions and diameters, layers).
         geo: its resolved geometry (which piles the mesh holds, and in which fraction).
         pb: the :class:`~pilegroup.solver.problem.BiotProblem`.
         out: output folder for the CSV files.
@@ -78,7 +78,8 @@ class PileProbe:
         self.sc, self.pb, self.out = sc, pb, Path(out)
         self.comm = pb.comm
         self.xy = np.array(sc.piles.xy, dtype=float)
-        self.d = sc.piles.diameter_m
+        #: every pile's diameter (m), aligned with ``xy`` (pile i at index i - 1)
+        self.diameters = np.array(sc.piles.diameters, dtype=float)
         # every pile of the foundation from its mirror image in a symmetry-reduced mesh, whose
         # cut piles carry their meshed fraction of the load
         spec = geo.spec
@@ -118,7 +119,9 @@ class PileProbe:
             owned = np.arange(x.shape[0]) < nloc
             self._x = x
             r = np.linalg.norm(x[:, None, :2] - self.xy[None, :, :], axis=2)
-            on = (r < 0.5 * self.d * 1.001) & owned[:, None] & (self._itf.A[:, None] > 0)
+            # a node is on pile k's shaft within its own radius (+0.1 %): piles do not overlap
+            on = (r < 0.5 * self.diameters[None, :] * 1.001) & owned[:, None] \
+                & (self._itf.A[:, None] > 0)
             self._node_pile = np.where(on.any(axis=1), np.argmax(on, axis=1) + 1, 0)
         self.profile_rows: list[str] = []
         self.layer_rows: list[str] = []
@@ -266,7 +269,7 @@ class PileProbe:
                 Nz = np.interp(dz, dN, N) if N.size else np.zeros_like(dz)
             else:
                 dz, Nz = dN, N
-                fr = -np.gradient(N, dN) / (math.pi * self.d) if N.size > 1 \
+                fr = -np.gradient(N, dN) / (math.pi * self.diameters[i - 1]) if N.size > 1 \
                     else np.zeros_like(N)
                 rel = np.zeros_like(N)
             lay = self._layer_of(dz)

@@ -152,12 +152,16 @@ def build_problem(sc: Scenario, geo: ResolvedGeometry, md: MeshData, preset: str
 
 
 def installation(sc: Scenario) -> InstallationExcess | None:
-    """The piles' installation pore pressures (every pile of the whole foundation), or None."""
-    ins = sc.piles.installation
+    """The piles' installation pore pressures (every pile of the whole foundation), or None.
+
+    Each pile's cavity has its own radius and toe (its diameter and length in soil).
+    """
+    p = sc.piles
+    ins = p.installation
     if ins is None:
         return None
-    r0, z_toe = sc.piles.diameter_m / 2, -sc.piles.length_in_soil_m
-    return InstallationExcess(tuple((x, y, r0, z_toe) for x, y in sc.piles.xy),
+    return InstallationExcess(tuple((x, y, d / 2, -length) for (x, y), d, length
+                                    in zip(p.xy, p.diameters, p.lengths, strict=True)),
                               ins.excess_pore_pressure_ratio, ins.radius_ratio)
 
 
@@ -300,12 +304,16 @@ def check_runaway(sc: Scenario, settlement_m: float, t: float, load_factor: floa
     The small-strain model can keep "carrying" a load far beyond the foundation's capacity by
     settling without bound; a settlement beyond the pile diameter (ten times the usual failure
     criterion of 10 % of it) is taken as the foundation having failed, and the run ends there
-    (exit 1, ``summary.json`` status ``failed``) instead of completing.
+    (exit 1, ``summary.json`` status ``failed``) instead of completing. The settlement is the
+    foundation's (cap, or mean of the pile heads), so a group of piles of different diameters
+    is measured against the smallest diameter: the rule then stops a run no later than the
+    thinnest pile's failure and never lets one pile run away unnoticed.
     """
-    d = sc.piles.diameter_m
+    d = min(sc.piles.diameters)
+    what = "pile diameter" if d == max(sc.piles.diameters) else "smallest pile diameter"
     if settlement_m > d:
-        raise StepFailure(f"stage {stage!r}: the settlement {settlement_m:.4g} m exceeds the pile"
-                          f" diameter {d:g} m (runaway: the foundation does not carry the load)",
+        raise StepFailure(f"stage {stage!r}: the settlement {settlement_m:.4g} m exceeds the"
+                          f" {what} {d:g} m (runaway: the foundation does not carry the load)",
                           t, load_factor, stage)
 
 
