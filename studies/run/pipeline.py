@@ -364,23 +364,31 @@ def _step_hook(sc: Scenario, probes: tuple[PileProbe, LoadSettlementCurve, Settl
     return on_step
 
 
+def _write_stiffness(sc: Scenario, pb: BiotProblem, motion: CapMotion,
+                     stages: list[SolverStage], out: Path) -> None:
+    """``cap_stiffness.csv`` probed at the run's final state (:mod:`.stiffness`)."""
+    K = cap_stiffness(sc, pb, motion, stages)
+    if pb.comm.rank == 0:
+        write_cap_stiffness(out / STIFFNESS_CSV, K)
+
+
 def run_coupled(sc: Scenario, geo: ResolvedGeometry, md: MeshData, out: Path,
                 preset: str | None = None, resume: dict[str, Any] | None = None
                 ) -> RunSummary:
-    """Run every stage of ``sc`` on ``md`` with the scenario's exports; returns the summary.
-
-    ``geo``: the scenario's resolved geometry, of which ``md`` is the mesh.
+    """Run every stage of ``sc`` on ``md`` (``geo``'s mesh) with its exports; the summary.
 
     Exports, written at every output time: ``settlement.csv``, the pile tables
-    (:class:`~pilegroup.studies.run.pile_probe.PileProbe`), ``gauges.csv`` (when the scenario has
-    ``outputs.gauge_depths_m``: :class:`~pilegroup.studies.run.gauge_probe.GaugeProbe`),
+    (:class:`~pilegroup.studies.run.pile_probe.PileProbe`,
+    :mod:`~pilegroup.studies.run.section_probe`: sections, heads, cap motion), ``gauges.csv``
+    (with ``outputs.gauge_depths_m``: :class:`~pilegroup.studies.run.gauge_probe.GaugeProbe`),
     ``results*.xdmf`` (when ``outputs.xdmf``) and ``summary_solver.json`` (``complete: false``
     until the end, then the full run summary; after a :class:`~pilegroup.errors.StepFailure`
     the summary up to the failure, with the message as ``failure``). Checkpoints
     (:class:`~pilegroup.studies.run.checkpoint.Checkpoints`) at every output time, every
     ``outputs.checkpoint_every_min`` and on a stop request (which ends the run with
     :class:`~pilegroup.errors.RunInterrupted`). ``resume``: the manifest of the checkpoint to
-    continue from (:func:`~pilegroup.studies.run.checkpoint.check_resume`).
+    continue from (:func:`~pilegroup.studies.run.checkpoint.check_resume`). With
+    ``outputs.cap_stiffness``, ``cap_stiffness.csv`` at the end.
     """
     t0 = time.perf_counter()
     pb = build_problem(sc, geo, md, preset)
@@ -409,12 +417,10 @@ def run_coupled(sc: Scenario, geo: ResolvedGeometry, md: MeshData, out: Path,
     curve = LoadSettlementCurve(pb, settlement.probe, sc.total_cap_load(),
                                 out / "load_settlement.csv")
     motion = CapMotion(sc, geo, pb, out)
-    exports: list[Export] = [settlement, piles, ground, curve,
-                             PileSections(sc, geo, pb, piles, out), motion]
-    if capacity is not None:  # after the pile probe, which sets the forces' zero
-        exports.append(capacity)
-    if gauges is not None:
-        exports.append(gauges)
+    exports: list[Export] = [settlement, piles, ground, curve, motion,
+                             PileSections(sc, geo, pb, piles, out)]
+    # the capacity probe after the pile probe, which sets the forces' zero
+    exports += [e for e in (capacity, gauges) if e is not None]
     if sc.outputs.xdmf:
         exports.append(XDMFSeries(pb, out / "results.xdmf", xdmf_label(geo.symmetry),
                                   resume=resume is not None))
@@ -422,9 +428,8 @@ def run_coupled(sc: Scenario, geo: ResolvedGeometry, md: MeshData, out: Path,
     stages = solver_stages(sc)
     ckpt = Checkpoints(out, sc, pb, [st.name for st in stages], exports)
     state = ckpt.restore(resume) if resume is not None else None
-    quiet = os.environ.get("PILEGROUP_PROGRESS") == "0"  # e.g. the runs of a batch
     bar = tqdm(total=sc.time.end_day, initial=sc.time.start_day, unit="day", desc=sc.name,
-               disable=pb.comm.rank != 0 or quiet,
+               disable=pb.comm.rank != 0 or os.environ.get("PILEGROUP_PROGRESS") == "0",
                bar_format="{desc}: {n:.3g}/{total:g} day |{bar}| {elapsed}{postfix}")
     on_step = _step_hook(sc, (piles, curve, settlement, capacity), bar)
     try:
@@ -443,9 +448,7 @@ def run_coupled(sc: Scenario, geo: ResolvedGeometry, md: MeshData, out: Path,
     if capacity is not None:
         capacity.finish(run_log.capacity_end)
     if sc.outputs.cap_stiffness:
-        K = cap_stiffness(sc, pb, motion, stages)
-        if pb.comm.rank == 0:
-            write_cap_stiffness(out / STIFFNESS_CSV, K)
+        _write_stiffness(sc, pb, motion, stages, out)
     data = run_summary(pb, run_log, summary(True))
     writer.finish(data)
     return data

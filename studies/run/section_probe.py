@@ -93,7 +93,7 @@ class PileSections:
                  piles: PileProbe, out: Path) -> None:
         self.pb, self.piles, self.out, self.comm = pb, piles, Path(out), pb.comm
         self.xy = [tuple(map(float, p)) for p in sc.piles.xy]
-        self.radius = 0.5 * sc.piles.diameter_m
+        self.radius = [0.5 * d for d in sc.piles.diameters]
         spec = geo.spec
         self.planes = spec.cut_planes()
         self.source = spec.mirror_of()
@@ -146,7 +146,7 @@ class PileSections:
         out = {}
         for i in self.fraction:
             xp, yp = self.xy[i - 1]
-            on = np.hypot(x[:, 0] - xp, x[:, 1] - yp) <= self.radius * 1.001 + _TOL
+            on = np.hypot(x[:, 0] - xp, x[:, 1] - yp) <= self.radius[i - 1] * 1.001 + _TOL
             arm = x[on] - np.array([xp, yp, 0.0])
             loc = np.concatenate([f[on].sum(axis=0), np.cross(arm, f[on]).sum(axis=0)])
             out[i] = -self.comm.allreduce(loc, op=MPI.SUM)

@@ -38,7 +38,8 @@ PROBE_FRACTION = 1e-2
 def probe_sizes(sc: Scenario) -> np.ndarray:
     """The six probe increments (kN, kN m)."""
     force = max(PROBE_FRACTION * sc.total_cap_load(), 1.0)
-    lever = max(sc.cap.size_x_m, sc.cap.size_y_m) if sc.cap is not None else sc.piles.diameter_m
+    lever = max(sc.cap.size_x_m, sc.cap.size_y_m) if sc.cap is not None \
+        else max(sc.piles.diameters)
     return np.array([force] * 3 + [force * lever] * 3)
 
 
