@@ -41,7 +41,19 @@ positive down; forces kN; stresses kPa; displacements m.
   (its head force due to the loads, from its top element layer, and its settlement there);
   the tangent stiffness of the segment ending at the row (empty at the first row and where the
   settlement did not grow). The criteria read off it are in ``summary.json``
-  (:mod:`pilegroup.studies.results.capacity`).
+  (:mod:`pilegroup.studies.results.capacity`);
+* ``cap_motion.csv``: ``t_day,ux_m,uy_m,uz_m,rx_rad,ry_rad,rz_rad`` (the cap's displacement and
+  rotation at the scenario's reference point, global axes, z up, rotations by the right-hand
+  rule; one row per output time);
+* ``pile_heads.csv``: ``t_day,pile,x_m,y_m,N_kN,Vx_kN,Vy_kN,Mx_kNm,My_kNm,T_kNm`` (the actions
+  at each pile head, global axes: axial force, compression positive, shears, bending moments and
+  torque);
+* ``pile_max_moment.csv``: ``t_day,pile,M_max_kNm,depth_m`` (the largest resultant bending
+  moment ``sqrt(Mx^2 + My^2)`` along each pile and its depth).
+
+The last three are written by runs whose load stages give cap actions (``Fx_kN`` ... ``Mz_kNm``);
+:mod:`pilegroup.studies.results.envelope` reads them, and a run folder without them is read
+without those quantities.
 """
 
 from __future__ import annotations
@@ -64,6 +76,9 @@ NEUTRAL_PLANE_CSV = "neutral_plane.csv"
 SETTLEMENT_PROFILES_CSV = "settlement_profiles.csv"
 TROUGH_CSV = "surface_trough.csv"
 CAPACITY_CSV = "capacity.csv"
+CAP_MOTION_CSV = "cap_motion.csv"
+PILE_HEADS_CSV = "pile_heads.csv"
+PILE_MAX_MOMENT_CSV = "pile_max_moment.csv"
 
 _LAYER_MEANS = ("t_day", "pile", "layer", "layer_name", "depth_top_m", "depth_bottom_m",
                 "shaft_friction_kPa", "relative_displacement_m", "viscoplastic_slip_m",
@@ -88,6 +103,10 @@ COLUMNS: dict[str, tuple[str, ...]] = {
     TROUGH_CSV: ("t_day", "x_m", "settlement_m"),
     CAPACITY_CSV: ("t_day", "pile", "load_factor", "load_kN", "settlement_m",
                    "tangent_stiffness_kN_per_m"),
+    CAP_MOTION_CSV: ("t_day", "ux_m", "uy_m", "uz_m", "rx_rad", "ry_rad", "rz_rad"),
+    PILE_HEADS_CSV: ("t_day", "pile", "x_m", "y_m", "N_kN", "Vx_kN", "Vy_kN", "Mx_kNm", "My_kNm",
+                     "T_kNm"),
+    PILE_MAX_MOMENT_CSV: ("t_day", "pile", "M_max_kNm", "depth_m"),
 }
 #: The columns that hold text; all others hold numbers.
 TEXT_COLUMNS = frozenset({"stage", "layer_name"})
