@@ -129,16 +129,22 @@ def _rows(path):
         return list(csv.DictReader(fh))
 
 
+#: A combination the small pile cannot carry: the run fails (settles more than its diameter).
+COLLAPSE = '[[combination]]\nname = "collapse"\nfactors = { permanent = 50.0 }\n'
+
+
 @pytest.mark.mpi
 def test_combinations_run_on_two_ranks_and_give_the_envelope(tmp_path, small_pile):
     f = _file(Path(small_pile).parent, HEAD.replace('"single_pile"', '"small_pile.toml"')
-              + 'set = { "outputs.xdmf" = false, "outputs.plots" = false }\n' + CASES + SLS + ULS)
+              + 'set = { "outputs.xdmf" = false, "outputs.plots" = false }\n' + CASES + SLS + ULS
+              + COLLAPSE)
     out = tmp_path / "out"
     cmd = [str(BIN / "mpirun"), "-n", "2", str(BIN / "pilegroup"), "combinations", str(f),
            "--out", str(out), "--no-progress"]
     env = {**os.environ, "PILEGROUP_MESH_CACHE": str(tmp_path / "cache")}
     r = subprocess.run(cmd, capture_output=True, text=True, timeout=300, env=env)
-    assert r.returncode == 0, r.stderr[-3000:]
+    assert r.returncode == 1, r.stderr[-3000:]  # a combination failed, the others complete
+    assert "collapse: failed" in r.stdout and "combinations: " in r.stdout
     rows = {(e["quantity"], e["pile"], e["time"]): e for e in _rows(out / "envelope.csv")}
     n = rows[("N_kN", "", "last")]
     assert n["max_combination"] == "ULS" and n["min_combination"] == "SLS"
@@ -147,17 +153,20 @@ def test_combinations_run_on_two_ranks_and_give_the_envelope(tmp_path, small_pil
     assert float(n["min"]) == pytest.approx(500.0, rel=0.02)
     w = rows[("settlement_m", "", "last")]
     assert w["max_combination"] == "ULS" and float(w["max"]) > float(w["min"]) > 0.0
-    assert w["combinations"] == "2" and w["excluded"] == ""
+    assert w["combinations"] == "2" and w["excluded"] == "collapse (failed)"
     # quantities of files these runs do not write are empty, and say why
     m = rows[("M_max_kNm", "", "all")]
     assert m["max"] == "" and m["excluded"] == ("SLS (no pile_max_moment.csv); "
-                                                "ULS (no pile_max_moment.csv)")
+                                                "ULS (no pile_max_moment.csv); collapse (failed)")
     md = (out / "envelope.md").read_text()
     assert f"| `N_kN` | kN | last | {float(n['max']):.4g} | `ULS` | 1 |" in md
+    assert "Not in the envelope (did not complete): `collapse` (failed: " in md
     results = _rows(out / "combination_results.csv")
-    assert {r["combination"] for r in results} == {"SLS", "ULS"}
+    assert {r["combination"] for r in results} == {"SLS", "ULS", "collapse"}
+    collapse = [r for r in results if r["combination"] == "collapse"]
+    assert len(collapse) == 1 and "exceeds the pile diameter" in collapse[0]["note"]
     # again: both complete, skipped, the envelope written again
     (out / "envelope.csv").unlink()
     r = subprocess.run(cmd, capture_output=True, text=True, timeout=300, env=env)
-    assert r.returncode == 0 and "complete before, skipped" in r.stdout
+    assert r.returncode == 1 and r.stdout.count("complete before, skipped") == 2
     assert (out / "envelope.csv").is_file()
