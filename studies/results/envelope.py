@@ -290,17 +290,21 @@ def envelope(runs: Sequence[CombinationRun],
             if run.status != "complete":
                 excluded.append((run.name, run.status))
                 continue
-            r = index.get(run.name, {}).get((name, pile, time))
+            own = index.get(run.name, {})
+            r = own.get((name, pile, time))
             if r is None or r.max is None or r.min is None:
-                excluded.append((run.name, r.note if r is not None and r.note else "no data"))
+                why = r if r is not None else own.get((name, None, time))  # a file's note
+                excluded.append((run.name, why.note if why is not None and why.note
+                                 else "no data"))
                 continue
             count += 1
             if hi is None or r.max.value > hi[0].value:
                 hi = (r.max, run.name)
             if lo is None or r.min.value < lo[0].value:
                 lo = (r.min, run.name)
-        out.append(EnvelopeRow(by_name[name], pile, time, hi and hi[0], hi[1] if hi else "",
-                               lo and lo[0], lo[1] if lo else "", count, tuple(excluded)))
+        out.append(EnvelopeRow(by_name[name], pile, time, hi[0] if hi else None,
+                               hi[1] if hi else "", lo[0] if lo else None, lo[1] if lo else "",
+                               count, tuple(excluded)))
     return out
 
 

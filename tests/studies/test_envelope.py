@@ -80,8 +80,10 @@ def test_governing_combination_pile_depth_and_time(tmp_path, folders):
     assert m["combinations"] == "2"
     assert m["excluded"] == "ULS_lift (no pile_max_moment.csv); ULS_wind (failed)"
     assert rows[("N_kN", "", "last")]["excluded"] == "ULS_wind (failed)"
-    # per pile
+    # per pile; a run folder without the file says so on every pile's row
     assert rows[("M_max_kNm", "1", "last")]["max_depth_m"] == "2.5"
+    assert rows[("M_max_kNm", "2", "all")]["excluded"].startswith(
+        "ULS_lift (no pile_max_moment.csv)")
     assert rows[("N_kN", "2", "last")]["max"] == "300"
 
 
