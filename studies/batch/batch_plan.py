@@ -83,23 +83,44 @@ class ResolvedCase:
         return self.case.name
 
 
-def _table(value: object, key: str) -> dict[str, Any]:
+def as_table(value: object, key: str) -> dict[str, Any]:
+    """``value`` if it is a TOML table, else a :class:`ScenarioError` naming ``key``."""
     if not isinstance(value, dict):
         raise ScenarioError(key, value, "must be a table")
     return value
 
 
-def _check_keys(table: dict[str, Any], key: str, allowed: tuple[str, ...]) -> None:
+def check_keys(table: dict[str, Any], key: str, allowed: tuple[str, ...]) -> None:
+    """A :class:`ScenarioError` naming ``key.k`` for the first key ``k`` not in ``allowed``."""
     for k, v in table.items():
         if k not in allowed:
             raise ScenarioError(f"{key}.{k}", v, f"unknown key; allowed keys: {', '.join(allowed)}")
 
 
-def _check_name(name: object, key: str) -> str:
-    if not isinstance(name, str) or not NAME.fullmatch(name) or name in RESERVED:
+def check_name(name: object, key: str, reserved: tuple[str, ...] = RESERVED) -> str:
+    """``name`` if it can name a run folder of the batch (:data:`NAME`, not one of ``reserved``)."""
+    if not isinstance(name, str) or not NAME.fullmatch(name) or name in reserved:
         raise ScenarioError(key, name, "must be a name of letters, digits and ._=,+- (it "
-                            f"names the case's run folder), other than {', '.join(RESERVED)}")
+                            f"names the case's run folder), other than {', '.join(reserved)}")
     return name
+
+
+def scenario_source(source: object, key: str, base_dir: Path | None = None) -> str:
+    """A bundled scenario name as it is, or the path of a scenario file.
+
+    A relative path is taken from ``base_dir`` (the plan's folder); a missing file or a value
+    that is not a name is a :class:`ScenarioError` naming ``key``.
+    """
+    if not isinstance(source, str) or not source:
+        raise ScenarioError(key, source, "must name a scenario file or a bundled scenario ("
+                            + ", ".join(BUNDLED) + ")")
+    if not Path(source).suffix and source in BUNDLED:
+        return source
+    path = Path(source) if base_dir is None else base_dir.resolve() / source
+    if not path.is_file():
+        raise ScenarioError(key, source, "no such file (a relative path is taken from the "
+                            "plan's folder); or a bundled name: " + ", ".join(BUNDLED))
+    return str(path)
 
 
 def _value_text(value: Any) -> str:
@@ -132,38 +153,27 @@ def sweep_cases(sweep: dict[str, Any]) -> list[BatchCase]:
 def plan_from_dict(data: dict[str, Any], base_dir: Path | None = None,
                    name: str = "batch") -> BatchPlan:
     """A :class:`BatchPlan` from a parsed plan file; ``base_dir``: the folder of relative paths."""
-    _check_keys(data, "plan", ("batch", "sweep", "case"))
-    head = _table(data.get("batch"), "batch")
-    _check_keys(head, "batch", PLAN_KEYS["batch"])
-    source = head.get("scenario")
-    if not isinstance(source, str) or not source:
-        raise ScenarioError("batch.scenario", source,
-                            "must name a scenario file or a bundled scenario ("
-                            + ", ".join(BUNDLED) + ")")
-    if not (not Path(source).suffix and source in BUNDLED):
-        path = Path(source) if base_dir is None else base_dir.resolve() / source
-        if not path.is_file():
-            raise ScenarioError("batch.scenario", source, "no such file (a relative path is "
-                                "taken from the plan's folder); or a bundled name: "
-                                + ", ".join(BUNDLED))
-        source = str(path)
-    common = list(_table(head.get("set", {}), "batch.set").items())
+    check_keys(data, "plan", ("batch", "sweep", "case"))
+    head = as_table(data.get("batch"), "batch")
+    check_keys(head, "batch", PLAN_KEYS["batch"])
+    source = scenario_source(head.get("scenario"), "batch.scenario", base_dir)
+    common = list(as_table(head.get("set", {}), "batch.set").items())
     cases = []
     entries = data.get("case", [])
     if not isinstance(entries, list):
         raise ScenarioError("case", entries, "must be a list of tables: [[case]]")
     for i, entry in enumerate(entries):
-        entry = _table(entry, f"case[{i}]")
-        _check_keys(entry, f"case[{i}]", PLAN_KEYS["case"])
-        cname = _check_name(entry.get("name"), f"case[{i}].name")
-        cases.append(BatchCase(cname, tuple(_table(entry.get("set", {}),
+        entry = as_table(entry, f"case[{i}]")
+        check_keys(entry, f"case[{i}]", PLAN_KEYS["case"])
+        cname = check_name(entry.get("name"), f"case[{i}].name")
+        cases.append(BatchCase(cname, tuple(as_table(entry.get("set", {}),
                                                   f"case[{i}].set").items())))
-    cases += sweep_cases(_table(data.get("sweep", {}), "sweep"))
+    cases += sweep_cases(as_table(data.get("sweep", {}), "sweep"))
     if not cases:
         raise ScenarioError("plan", "no cases", "give [[case]] entries and/or a [sweep] table")
     seen: set[str] = set()
     for c in cases:
-        _check_name(c.name, "case name")
+        check_name(c.name, "case name")
         if c.name in seen:
             raise ScenarioError("case name", c.name, "must be unique within the plan")
         seen.add(c.name)
@@ -171,20 +181,29 @@ def plan_from_dict(data: dict[str, Any], base_dir: Path | None = None,
                 name)
 
 
-def load_plan(path: str | Path) -> BatchPlan:
-    """Read and check a plan file (not yet its cases' scenarios: :func:`resolve_cases`)."""
-    path = Path(path)
+def read_toml(path: Path) -> dict[str, Any]:
+    """The parsed TOML file ``path`` (a missing, non-UTF-8 or invalid file: a ScenarioError)."""
     if not path.is_file():
         raise ScenarioError("plan", str(path), "no such file")
     try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
-    except tomllib.TOMLDecodeError as exc:
+        return tomllib.loads(path.read_text(encoding="utf-8"))
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
         raise ScenarioError("plan", str(path), f"is not valid TOML: {exc}") from None
+
+
+def in_file(path: Path, exc: ScenarioError) -> ScenarioError:
+    """``exc`` with its key prefixed by the name of the file ``path`` (one line, file and key)."""
+    return ScenarioError(f"{path.name}: {exc.key}", exc.value, exc.allowed, exc.unit)
+
+
+def load_plan(path: str | Path) -> BatchPlan:
+    """Read and check a plan file (not yet its cases' scenarios: :func:`resolve_cases`)."""
+    path = Path(path)
+    data = read_toml(path)
     try:
         return plan_from_dict(data, path.parent, path.stem)
     except ScenarioError as exc:
-        raise ScenarioError(f"{path.name}: {exc.key}", exc.value, exc.allowed,
-                            exc.unit) from None
+        raise in_file(path, exc) from None
 
 
 def scenario_digest(resolved: Scenario | dict[str, Any]) -> str:
@@ -214,5 +233,6 @@ def queue_order(cases: tuple[ResolvedCase, ...]) -> list[int]:
     return sorted(range(len(cases)), key=lambda i: (-cases[i].cost, i))
 
 
-__all__ = ["BatchPlan", "BatchCase", "ResolvedCase", "load_plan", "plan_from_dict", "queue_order",
-           "resolve_case", "resolve_cases", "scenario_digest", "sweep_cases"]
+__all__ = ["BatchCase", "BatchPlan", "ResolvedCase", "as_table", "check_keys", "check_name",
+           "in_file", "load_plan", "plan_from_dict", "queue_order", "read_toml", "resolve_case",
+           "resolve_cases", "scenario_digest", "scenario_source", "sweep_cases"]

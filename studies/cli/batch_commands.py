@@ -1,6 +1,6 @@
-"""The ``pilegroup batch`` and ``pilegroup study`` commands (registered by the CLI).
+"""The ``pilegroup batch``, ``combinations`` and ``study`` commands (registered by the CLI).
 
-Both run under MPI as they are (``mpirun -n N pilegroup batch PLAN --ranks-per-case k``, or
+All run under MPI as they are (``mpirun -n N pilegroup batch PLAN --ranks-per-case k``, or
 ``srun``). Exit codes as the rest of the CLI: 0 every case complete, 1 a case failed, 2 invalid
 input, 143/130 stopped by SIGTERM/SIGINT (the running cases recorded ``interrupted``); the
 one-line message of an invalid input is printed by world rank 0 only.
@@ -11,11 +11,15 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from pilegroup.errors import ScenarioError
 from pilegroup.model.loader import parse_override
 from pilegroup.studies.batch.rows import BatchRow
 from pilegroup.studies.report.paper_values import PAPER_HOURS
+
+if TYPE_CHECKING:
+    from pilegroup.studies.batch.execute import BatchResult
 
 EXIT_INPUT = 2
 
@@ -27,6 +31,17 @@ BATCH_DESCRIPTION = (
     "OUT/<case>; a failed case is recorded and the others go on (exit 1 at the end). Running "
     "the plan again skips the cases already complete for the same scenario. Rank 0 shows the "
     "progress and keeps OUT/batch.csv and OUT/batch.json current.")
+COMBINATIONS_DESCRIPTION = (
+    "Run load combinations (TOML: a base scenario, its load stage, [load_cases.NAME] tables of "
+    "cap actions Fx_kN Fy_kN Fz_kN Mx_kNm My_kNm Mz_kNm or cap_load_kN, and [[combination]] "
+    "entries with factors on the load cases; see README.md) as the cases of a batch, then "
+    "write the envelope: OUT/envelope.csv, OUT/envelope.md and OUT/combination_results.csv "
+    "(cap displacement and rotation, pile head axial force and shear, largest bending moment "
+    "along the piles: the extremes over the combinations at the last output time and over "
+    "every output time, with the combination that governs). Every combination is validated "
+    "before anything runs (exit 2 naming the file, the combination and the key). MPI groups, "
+    "failures, resume and stopping as pilegroup batch; a combination that failed is listed as "
+    "not in the envelope.")
 STUDY_DESCRIPTION = (
     "Mesh-sensitivity study: a batch over numerics.mesh.size_m (--sizes), the coarsest and "
     "finest sizes again with the interface normal penalty x --penalty-factor, and a report "
@@ -57,10 +72,25 @@ def _print_rows(rows: list[BatchRow]) -> None:
         print(f"{r['name']}: {r['status']}{skip}{wall}{why}")
 
 
+def _finish(result: BatchResult, what: str, files: str, again: str) -> int:
+    """Rank 0 prints the cases and the files; the exit code of a batch (every rank)."""
+    from pilegroup.studies.run.interrupt import signal_name
+
+    if _world_rank() == 0:
+        _print_rows(result.rows)
+        print(f"{what}: {files}")
+        if result.signum:
+            print(f"pilegroup: {what} interrupted by {signal_name(result.signum)}; {again}",
+                  file=sys.stderr, flush=True)
+    if result.signum:
+        return 128 + result.signum
+    return 1 if result.failed else 0
+
+
 def _cmd_batch(args: argparse.Namespace) -> int:
     from pilegroup.studies.batch.batch_plan import load_plan
     from pilegroup.studies.batch.execute import run_batch
-    from pilegroup.studies.run.interrupt import signal_name, stop_on_signals
+    from pilegroup.studies.run.interrupt import stop_on_signals
 
     try:
         plan = load_plan(args.plan)
@@ -69,15 +99,8 @@ def _cmd_batch(args: argparse.Namespace) -> int:
             result = run_batch(plan, out, args.ranks_per_case, progress=not args.no_progress)
     except ScenarioError as exc:
         return _input_error_once(exc)
-    if _world_rank() == 0:
-        _print_rows(result.rows)
-        print(f"batch: {out / 'batch.csv'}, {out / 'batch.json'}")
-        if result.signum:
-            print(f"pilegroup: batch interrupted by {signal_name(result.signum)}; run the plan "
-                  "again to run the cases not complete", file=sys.stderr, flush=True)
-    if result.signum:
-        return 128 + result.signum
-    return 1 if result.failed else 0
+    return _finish(result, "batch", f"{out / 'batch.csv'}, {out / 'batch.json'}",
+                   "run the plan again to run the cases not complete")
 
 
 def batch_arguments(p: argparse.ArgumentParser) -> None:
@@ -88,6 +111,34 @@ def batch_arguments(p: argparse.ArgumentParser) -> None:
                    help="MPI ranks of each case (must divide the number of ranks; default 1)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=_cmd_batch)
+
+
+def _cmd_combinations(args: argparse.Namespace) -> int:
+    from pilegroup.studies.campaigns.load_combinations import run_combinations
+    from pilegroup.studies.results.envelope import ENVELOPE_CSV, ENVELOPE_MD
+    from pilegroup.studies.run.interrupt import stop_on_signals
+
+    try:
+        out = Path(args.out) if args.out else Path("out") / Path(args.file).stem
+        with stop_on_signals():  # running cases stop at a step boundary, recorded interrupted
+            result = run_combinations(args.file, out, args.ranks_per_case,
+                                      progress=not args.no_progress)
+    except ScenarioError as exc:
+        return _input_error_once(exc)
+    return _finish(result, "combinations", f"{out / ENVELOPE_MD}, {out / ENVELOPE_CSV}",
+                   "run the command again to run the combinations not complete")
+
+
+def combinations_arguments(p: argparse.ArgumentParser) -> None:
+    """Arguments of ``pilegroup combinations``."""
+    p.add_argument("file", metavar="COMBINATIONS.toml", help="the combinations file")
+    p.add_argument("--out", help="folder of the combinations' runs and the envelope (default: "
+                   "out/<file stem>)")
+    p.add_argument("--ranks-per-case", type=int, default=1, metavar="K",
+                   help="MPI ranks of each combination's run (must divide the number of ranks; "
+                   "default 1)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.set_defaults(func=_cmd_combinations)
 
 
 def _cmd_study_mesh(args: argparse.Namespace) -> int:
@@ -135,6 +186,8 @@ def study_arguments(p: argparse.ArgumentParser) -> None:
 COMMANDS = (
     ("batch", "run the cases of a plan file on groups of MPI ranks", BATCH_DESCRIPTION,
      batch_arguments),
+    ("combinations", "run load combinations of cap actions as a batch; their envelope",
+     COMBINATIONS_DESCRIPTION, combinations_arguments),
     ("study", "studies made of batches (mesh sensitivity)", "Studies made of batches of runs.",
      study_arguments),
 )

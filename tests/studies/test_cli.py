@@ -15,7 +15,7 @@ BIN = Path(sys.executable).parent
 
 @pytest.mark.parametrize("argv", [[], ["scenario"], ["scenario", "show"], ["scenario", "validate"],
                                   ["run"], ["mesh"], ["verify"], ["bench"], ["batch"],
-                                  ["study"], ["study", "mesh"]])
+                                  ["combinations"], ["study"], ["study", "mesh"]])
 def test_every_command_has_help(argv, capsys):
     with pytest.raises(SystemExit) as info:
         build_parser().parse_args([*argv, "--help"])
