@@ -131,13 +131,17 @@ def _rows(path):
 
 #: A combination the small pile cannot carry: the run fails (settles more than its diameter).
 COLLAPSE = '[[combination]]\nname = "collapse"\nfactors = { permanent = 50.0 }\n'
+#: a horizontal case at the pile head, and the ULS combination with it
+BRAKING = '[load_cases.braking]\nFx_kN = 20.0\nMy_kNm = 10.0\n'
+ULS_LATERAL = ('[[combination]]\nname = "ULS"\n'
+               'factors = { permanent = 1.35, traffic = 1.5, braking = 1.5 }\n')
 
 
 @pytest.mark.mpi
 def test_combinations_run_on_two_ranks_and_give_the_envelope(tmp_path, small_pile):
     f = _file(Path(small_pile).parent, HEAD.replace('"single_pile"', '"small_pile.toml"')
-              + 'set = { "outputs.xdmf" = false, "outputs.plots" = false }\n' + CASES + SLS + ULS
-              + COLLAPSE)
+              + 'set = { "outputs.xdmf" = false, "outputs.plots" = false }\n' + CASES + BRAKING
+              + SLS + ULS_LATERAL + COLLAPSE)
     out = tmp_path / "out"
     cmd = [str(BIN / "mpirun"), "-n", "2", str(BIN / "pilegroup"), "combinations", str(f),
            "--out", str(out), "--no-progress"]
@@ -155,9 +159,15 @@ def test_combinations_run_on_two_ranks_and_give_the_envelope(tmp_path, small_pil
     assert w["max_combination"] == "ULS" and float(w["max"]) > float(w["min"]) > 0.0
     assert w["combinations"] == "2" and w["excluded"] == "collapse (failed)"
     # quantities of files these runs do not write are empty, and say why
+    # the braking case: the head shear of the one pile is 1.5 x 20 kN, and ULS bends it most
+    v = rows[("V_kN", "", "last")]
+    assert v["max_combination"] == "ULS" and float(v["max"]) == pytest.approx(30.0, rel=1e-3)
     m = rows[("M_max_kNm", "", "all")]
-    assert m["max"] == "" and m["excluded"] == ("SLS (no pile_max_moment.csv); "
-                                                "ULS (no pile_max_moment.csv); collapse (failed)")
+    assert m["max_combination"] == "ULS" and float(m["max"]) >= 15.0  # at least the head's
+    assert m["excluded"] == "collapse (failed)"
+    for q in ("ux_m", "ry_rad"):
+        assert rows[(q, "", "last")]["max_combination"] == "ULS"
+        assert float(rows[(q, "", "last")]["max"]) > 0.0
     md = (out / "envelope.md").read_text()
     assert f"| `N_kN` | kN | last | {float(n['max']):.4g} | `ULS` | 1 |" in md
     assert "Not in the envelope (did not complete): `collapse` (failed: " in md

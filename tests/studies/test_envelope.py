@@ -34,8 +34,9 @@ def _run(tmp_path, name, scale, moments=True, tension=0.0):
                                     0, 1e-4 * scale * t, 0) for t in TIMES])
     heads = []
     for t in TIMES:
-        heads.append((t, 1, -1, 0, 300 * scale * t, 3 * t, 4 * t, 0, 0, 0))
-        heads.append((t, 2, 1, 0, 100 * scale * t - tension * t, 6 * scale * t, 8 * t, 0, 0, 0))
+        heads.append((t, 1, -1, 0, 300 * scale * t, 3 * t, 4 * t, 0, 0, 0, 0))
+        heads.append((t, 2, 1, 0, 100 * scale * t - tension * t, 6 * scale * t, 8 * t, 0, 0, 0,
+                      0))
     _write(run, "pile_heads.csv", heads)
     if moments:
         _write(run, "pile_max_moment.csv", [r for t in TIMES for r in (
