@@ -54,8 +54,8 @@ DESCRIPTIONS = {
                   " stiffness matrix about the action point ([actions] point_m; default the cap"
                   " top's centre) to cap_stiffness.csv in --out: six small undrained probe "
                   "increments from the final state (without a cap: the single pile head's "
-                  "matrix). Shorten the run with --set time.end_day=DAY to probe an earlier "
-                  "time. Everything a run writes is written too."),
+                  "matrix). --day DAY probes the state at that day (a stage's end or a day in a"
+                  " consolidation stage). Everything a run writes is written too."),
     "mesh": ("Mesh the scenario with gmsh (cap, piles, layered soil; plan quads extruded through "
              "the layers), write mesh.xdmf with cell and facet tags (ParaView), "
              "mesh_summary.json, plan.png and cutaway.png, and print counts and quality. Meshes "
@@ -138,6 +138,10 @@ def _cmd_run(args: argparse.Namespace) -> int:
 
     extra = {"outputs.cap_stiffness": True} if args.command == "stiffness" else {}
     sc = load_scenario(args.scenario, _overrides(args) | extra)
+    if getattr(args, "day", None) is not None:
+        from pilegroup.studies.run.stiffness import scenario_until
+
+        sc = scenario_until(sc, args.day)
     out = Path(args.out) if args.out else Path("out") / sc.name
     with stop_on_signals():  # SIGTERM/SIGINT: checkpoint at the next step boundary, then stop
         summary = run_scenario(sc, out, mesh_size=args.mesh_size, stop_after=args.stop_after,
@@ -163,6 +167,13 @@ def _run_arguments(p: argparse.ArgumentParser) -> None:
                    help="run even when the memory estimate per rank (printed for every run) "
                    "exceeds the memory available per rank (without it: exit 2 before meshing)")
     p.set_defaults(func=_cmd_run)
+
+
+def _stiffness_arguments(p: argparse.ArgumentParser) -> None:
+    _run_arguments(p)
+    p.add_argument("--day", type=float, default=None, metavar="DAY",
+                   help="probe the state at this day (default: the scenario's end): a stage's "
+                   "end or a day in a consolidation stage; the run ends there")
 
 
 def _cmd_mesh(args: argparse.Namespace) -> int:
@@ -328,7 +339,7 @@ def build_parser() -> argparse.ArgumentParser:
         ("scenario", "show or validate scenario files", _scenario_arguments),
         ("run", "run a scenario (main job)", _run_arguments),
         ("stiffness", "the cap's 6 x 6 stiffness matrix at the end of a run",
-         _run_arguments),
+         _stiffness_arguments),
         ("mesh", "build the all-hexahedral mesh of a scenario", _mesh_arguments),
         ("verify", "run verification cases against closed forms", _verify_arguments),
         ("bench", "benchmarks that print tables (not tests)", _bench_arguments),

@@ -16,12 +16,13 @@ holds the actions per unit motion, ``K[i, j] = dF_i / du_j``.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
 
-from pilegroup.errors import SolverError
+from pilegroup.errors import ScenarioError, SolverError
 from pilegroup.fileio import write_text_atomic
 from pilegroup.model import Scenario
 from pilegroup.model.actions import COMPONENTS, transfer
@@ -33,6 +34,32 @@ from pilegroup.studies.run.section_probe import CapMotion
 STIFFNESS_CSV = "cap_stiffness.csv"
 #: Probe size: this fraction of the vertical load (at least 1 kN); moments times the face size.
 PROBE_FRACTION = 1e-2
+
+
+def scenario_until(sc: Scenario, day: float) -> Scenario:
+    """``sc`` ended at ``day``: the matrix of the state then (``pilegroup stiffness --day``).
+
+    ``day`` must close a stage or fall in a consolidation stage (whose end moves to it); the
+    stages after it are dropped and the output times after it too, ``day`` added. Inside a
+    load, surcharge or groundwater stage the actions would not be the stage's: an error
+    naming ``--day``.
+    """
+    kept = []
+    for st, t0, t1 in sc.stage_times():
+        if t0 >= day and kept and st.kind not in ("geostatic", "installation"):
+            break
+        if t0 <= day < t1 and st.kind != "consolidation":
+            raise ScenarioError("--day", day, f"falls inside the {st.kind} stage {st.name!r} "
+                                f"(day {t0:g} .. {t1:g}); allowed: a stage's end or a day in a "
+                                "consolidation stage")
+        kept.append(dataclasses.replace(st, until_day=day) if st.kind == "consolidation"
+                    and t0 <= day < t1 else st)
+    if not sc.time.start_day < day <= sc.time.end_day:
+        raise ScenarioError("--day", day, f"must be in ({sc.time.start_day:g}, "
+                            f"{sc.time.end_day:g}], the analysis's days", "day")
+    days = tuple(sorted({t for t in sc.time.output_days if t < day} | {day}))
+    time = dataclasses.replace(sc.time, end_day=day, output_days=days)
+    return dataclasses.replace(sc, stages=tuple(kept), time=time)
 
 
 def probe_sizes(sc: Scenario) -> np.ndarray:
@@ -74,4 +101,5 @@ def write_cap_stiffness(path: Path, K: np.ndarray) -> None:
     write_text_atomic(path, "\n".join([head, *rows]) + "\n")
 
 
-__all__ = ["STIFFNESS_CSV", "cap_stiffness", "probe_sizes", "write_cap_stiffness"]
+__all__ = ["STIFFNESS_CSV", "cap_stiffness", "probe_sizes", "scenario_until",
+           "write_cap_stiffness"]

@@ -33,3 +33,19 @@ def test_rigid_cap_moment():
 def test_lateral_single_pile():
     r = lat.lateral_single_pile(size="fast")
     assert r.tolerance == 0.15 and r.passed, r.details
+
+
+def test_stiffness_day_ends_the_scenario_at_a_stage_end_or_in_consolidation():
+    from pilegroup.model import ScenarioError, load_scenario
+    from pilegroup.studies.run.stiffness import scenario_until
+
+    sc = load_scenario("pier667_lateral")
+    at2 = scenario_until(sc, 2.0)
+    assert [st.name for st in at2.stages] == ["geostatic", "loading", "braking"]
+    assert at2.time.end_day == 2.0 and at2.time.output_days == (0.0, 1.0, 2.0)
+    at30 = scenario_until(sc, 30.0)
+    assert at30.stages[-1].until_day == 30.0 and at30.time.output_days[-1] == 30.0
+    with pytest.raises(ScenarioError, match="inside the load stage 'braking'"):
+        scenario_until(sc, 1.5)
+    with pytest.raises(ScenarioError, match=r"must be in \(0, 317\]"):
+        scenario_until(sc, 400.0)
