@@ -77,15 +77,18 @@ def randolph_head(H: float, M: float, d: float, E_p: float, G: float, nu: float
             lc)
 
 
-def _soil(name: str, E_kPa: float = E_SOIL, thickness: float | None = None
-          ) -> dict[str, Any]:
-    """A soil layer whose interface is a linear spring far from its strength.
+def _soil(name: str, E_kPa: float = E_SOIL, thickness: float | None = None,
+          linear: bool = False) -> dict[str, Any]:
+    """A soil layer and its interface (Clough–Duncan springs, far from their strength).
 
-    ``n = 0``, ``R_f = 0``: the group cases' responses are linear in the actions.
+    ``linear``: ``n = 0``, ``R_f = 0``, a constant spring stiffness, so that the response is
+    linear in the actions (the rigid-cap case compares forces before and after the moment);
+    otherwise the hyperbolic spring of a soft clay (``n = 0.5``, ``R_f = 0.9``).
     """
+    n, rf = (0.0, 0.0) if linear else (0.5, 0.9)
     lay = {"name": name, "gamma_kN_per_m3": 18.0, "E_MPa": E_kPa / 1e3, "nu": NU_SOIL,
            "phi_deg": 20.0, "c_kPa": 20.0, "k_m_per_day": 10.0, "e0": 0.8,
-           "interface": {"delta_deg": 20.0, "K": 300.0, "n": 0.0, "R_f": 0.0,
+           "interface": {"delta_deg": 20.0, "K": 300.0, "n": n, "R_f": rf,
                          "eta_MPa_day": 10.0}}
     return lay | ({"thickness_m": thickness} if thickness is not None else {})
 
@@ -139,7 +142,8 @@ def lateral_scenario(case: str, size: str = "fast") -> dict[str, Any]:
                               "dz_surface_m": 1.0, "dz_toe_m": 1.0, "dz_max_m": 2.0,
                               "dz_max_deep_m": 4.0}},
         "layers": [_soil("clay")] if case == "equilibrium" else
-                  [_soil("clay", thickness=8.0), _soil("rock", E_kPa=ROCK_E)],
+                  [_soil("clay", thickness=8.0, linear=True),
+                   _soil("rock", E_kPa=ROCK_E, linear=True)],
     }
 
 

@@ -76,6 +76,20 @@ def _ground_tables(out: Path, files: tuple[str, ...]) -> None:
         write_csv(out / "surface_trough.csv", list(COLUMNS["surface_trough.csv"]), rows)
 
 
+def _lateral_tables(out: Path, files: tuple[str, ...]) -> None:
+    """pile_bending.csv (piles 1 and 5 bent along x), cap_motion.csv (a cap pushed along x)."""
+    depths = [0.5 + k for k in range(40)]
+    if "pile_bending.csv" in files:
+        rows = [[t, p, z, 1200.0, 50.0 * math.exp(-z / 5), 0.0, 0.0,
+                 100.0 * z * math.exp(-z / 4), 0.0, 0.01 * math.exp(-z / 6), 0.0]
+                for t in OUTPUT_DAYS for p in (1, CENTRE) for z in depths]
+        write_csv(out / "pile_bending.csv", list(COLUMNS["pile_bending.csv"]), rows)
+    if "cap_motion.csv" in files:
+        rows = [[t, 0.01 * (1 + t / 317), 0.0, -settlement(t), 0.0, 5e-4 * (1 + t / 317), 0.0]
+                for t in OUTPUT_DAYS]
+        write_csv(out / "cap_motion.csv", list(COLUMNS["cap_motion.csv"]), rows)
+
+
 def make_run(out: Path, slopes: dict[int, float] | None = None, shape: str = "early",
              files: tuple[str, ...] = tuple(COLUMNS), complete: bool = True) -> Path:
     """A run folder following the data contract (centre pile 5 and corner pile 1)."""
@@ -113,6 +127,7 @@ def make_run(out: Path, slopes: dict[int, float] | None = None, shape: str = "ea
                 for s, z in enumerate(GAUGE_DEPTHS, start=1)]
         write_csv(out / "gauges.csv", list(COLUMNS["gauges.csv"]), rows)
     _ground_tables(out, files)
+    _lateral_tables(out, files)
     if "capacity.csv" in files:  # a capacity stage's curve: stiff, then plunging at 20 MN
         w = [0.0, 0.01, 0.02, 0.04, 0.08, 0.2]
         q = [10856.0, 15000.0, 18000.0, 19500.0, 19900.0, 20000.0]
