@@ -237,6 +237,11 @@ def create_ksp(
     """
     spec = get_preset(preset)
     opts = PETSc.Options()
+    # a clean slate: options an earlier problem of this process left under the prefix (another
+    # preset's blocks, its overrides) must not reach this one
+    for key in list(opts.getAll()):
+        if key.startswith(prefix):
+            opts.delValue(key)
     for k, v in merged_options(preset, overrides).items():
         opts[f"{prefix}{k}"] = v
     ksp = PETSc.KSP().create(comm)
