@@ -277,7 +277,20 @@ def _vertex_to_dof_sub(fmesh: dmesh.Mesh) -> np.ndarray:
 
 
 def peak_rss_mb() -> float:
-    """Peak resident memory of this process so far, MB (``getrusage``; Linux reports KiB)."""
+    """Peak resident memory of this process so far, MB.
+
+    Linux: ``VmHWM`` of ``/proc/self/status``, the high-water mark of this program's own
+    address space. ``getrusage``'s ``ru_maxrss`` survives ``execve``: a process started by a
+    large parent (``fork`` then ``exec``, e.g. a run launched from a test session of 1 GB)
+    reports the parent's size at the fork as its own peak. Elsewhere ``ru_maxrss`` (KiB).
+    """
+    try:
+        with open("/proc/self/status", encoding="ascii") as fh:
+            for line in fh:
+                if line.startswith("VmHWM:"):
+                    return float(line.split()[1]) / 1024.0
+    except OSError:
+        pass
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
 
 
