@@ -34,7 +34,7 @@ from mpi4py import MPI
 
 from pilegroup.constitutive.base import mandel_to_tensor
 from pilegroup.errors import OutputError
-from pilegroup.fileio import atomic_path, write_json_atomic
+from pilegroup.fileio import atomic_path, proc_kib, write_json_atomic
 from pilegroup.geometry import groups
 from pilegroup.solver.qpstate import QuadratureState
 from pilegroup.solver.runlog import RunLog
@@ -284,13 +284,9 @@ def peak_rss_mb() -> float:
     large parent (``fork`` then ``exec``, e.g. a run launched from a test session of 1 GB)
     reports the parent's size at the fork as its own peak. Elsewhere ``ru_maxrss`` (KiB).
     """
-    try:
-        with open("/proc/self/status", encoding="ascii") as fh:
-            for line in fh:
-                if line.startswith("VmHWM:"):
-                    return float(line.split()[1]) / 1024.0
-    except OSError:
-        pass
+    hwm = proc_kib("/proc/self/status", "VmHWM")
+    if hwm is not None:
+        return hwm / 1024.0
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
 
 

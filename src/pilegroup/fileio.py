@@ -1,6 +1,7 @@
 """Small file helpers shared by every layer.
 
-Atomic writes, so that an interrupted run never leaves a half-written JSON, CSV, mesh or
+:func:`proc_kib` reads one value of a Linux ``/proc`` file (memory of this process and of the
+machine). Atomic writes, so that an interrupted run never leaves a half-written JSON, CSV, mesh or
 picture behind: the file is written under a temporary name in the same folder and renamed. A
 write that fails (a full disk, a read-only folder, a directory in the file's place) raises
 :class:`~pilegroup.errors.OutputError` naming the file, not its temporary name.
@@ -18,6 +19,22 @@ from pathlib import Path
 from typing import Any
 
 from pilegroup.errors import OutputError
+
+
+def proc_kib(path: str, key: str) -> float | None:
+    """The value of the line ``key: N kB`` of a Linux ``/proc`` file, in KiB; ``None`` if none.
+
+    E.g. ``proc_kib("/proc/self/status", "VmHWM")``; ``None`` where the file or line does not
+    exist (not Linux).
+    """
+    try:
+        with open(path, encoding="ascii") as fh:
+            for line in fh:
+                if line.startswith(f"{key}:"):
+                    return float(line.split()[1])
+    except OSError:
+        pass
+    return None
 
 
 def json_default(obj: Any) -> Any:

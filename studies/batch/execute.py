@@ -59,7 +59,7 @@ from tqdm import tqdm
 from tqdm.contrib.logging import logging_redirect_tqdm
 
 from pilegroup.errors import FolderBusy, PilegroupError, RunInterrupted, ScenarioError
-from pilegroup.fileio import write_json_atomic
+from pilegroup.fileio import proc_kib, write_json_atomic
 from pilegroup.studies.batch.batch_plan import BatchPlan, ResolvedCase, queue_order, resolve_cases
 from pilegroup.studies.batch.rows import (
     RECORD,
@@ -113,13 +113,8 @@ def release_memory(comm: MPI.Comm) -> None:
 
 def rss_mb() -> float:
     """Resident memory of this process now, MB (Linux; 0 elsewhere)."""
-    try:
-        for line in Path("/proc/self/status").read_text().splitlines():
-            if line.startswith("VmRSS:"):
-                return int(line.split()[1]) / 1024.0  # kB
-    except OSError:
-        pass
-    return 0.0
+    rss = proc_kib("/proc/self/status", "VmRSS")
+    return 0.0 if rss is None else rss / 1024.0
 
 
 def reset_peak_rss() -> bool:

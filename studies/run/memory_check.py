@@ -34,6 +34,7 @@ import numpy as np
 from mpi4py import MPI
 
 from pilegroup.errors import MachineTooSmall
+from pilegroup.fileio import proc_kib
 from pilegroup.geometry.adapter import ResolvedGeometry
 from pilegroup.model import Scenario
 from pilegroup.model.mesh_estimate import SAFETY, estimated_cells
@@ -112,13 +113,9 @@ def available_mb_per_rank(comm: MPI.Comm) -> tuple[float, int]:
 
 def available_mb() -> float:
     """Memory that can be allocated without swapping, MB (``MemAvailable``, else free pages)."""
-    try:
-        with open("/proc/meminfo", encoding="ascii") as f:
-            for line in f:
-                if line.startswith("MemAvailable:"):
-                    return int(line.split()[1]) / 1024.0
-    except OSError:
-        pass
+    avail = proc_kib("/proc/meminfo", "MemAvailable")
+    if avail is not None:
+        return avail / 1024.0
     return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_AVPHYS_PAGES") / 2 ** 20
 
 
