@@ -27,6 +27,23 @@ def facet_area(md: MeshData, names: Sequence[str], interior: bool = False) -> fl
     return md.mesh.comm.allreduce(fem.assemble_scalar(fem.form(form)), op=MPI.SUM)
 
 
+def face_measure(md: MeshData, names: Sequence[str]) -> ufl.Measure:
+    """The exterior measure over the facet groups ``names`` (one face, e.g. the cap top)."""
+    ds = ufl.Measure("ds", domain=md.mesh, subdomain_data=md.facet_tags)
+    return sum((ds(md.facet_tag(n)) for n in names[1:]), start=ds(md.facet_tag(names[0])))
+
+
+def face_geometry(md: MeshData, names: Sequence[str], centre: Sequence[float]
+                  ) -> tuple[float, float, float]:
+    """(area m^2, I_xx, I_yy m^4 about ``centre``) of the meshed facet groups ``names``."""
+    face = face_measure(md, names)
+    x = ufl.SpatialCoordinate(md.mesh)
+    loc = [fem.assemble_scalar(fem.form(f * face)) for f in
+           (1.0 + 0.0 * x[0], (x[1] - centre[1]) ** 2, (x[0] - centre[0]) ** 2)]
+    area, ixx, iyy = md.mesh.comm.allreduce(np.array(loc), op=MPI.SUM)
+    return float(area), float(ixx), float(iyy)
+
+
 class SettlementProbe:
     """Mean vertical displacement (m, down positive) over exterior facet groups.
 
@@ -38,11 +55,9 @@ class SettlementProbe:
 
     def __init__(self, problem: BiotProblem, names: Sequence[str]) -> None:
         md = problem.md
-        ds = ufl.Measure("ds", domain=md.mesh, subdomain_data=md.facet_tags)
-        area = sum((ds(md.facet_tag(n)) for n in names[1:]), start=ds(md.facet_tag(names[0])))
         body = problem.body_of_facet(names[0])
         em = [body.emap] if body.emap is not None else None
-        self._num = fem.form(-body.u[2] * area, entity_maps=em)
+        self._num = fem.form(-body.u[2] * face_measure(md, names), entity_maps=em)
         self._area = facet_area(md, names)
         self._comm = md.mesh.comm
 
@@ -67,15 +82,13 @@ class FaceMotion:
     def __init__(self, problem: BiotProblem, names: Sequence[str],
                  centre: Sequence[float]) -> None:
         md = problem.md
-        ds = ufl.Measure("ds", domain=md.mesh, subdomain_data=md.facet_tags)
-        face = sum((ds(md.facet_tag(n)) for n in names[1:]), start=ds(md.facet_tag(names[0])))
+        face = face_measure(md, names)
         body = problem.body_of_facet(names[0])
         em = [body.emap] if body.emap is not None else None
         x, u = ufl.SpatialCoordinate(md.mesh), body.u
         dx_, dy_ = x[0] - centre[0], x[1] - centre[1]
         self._comm = md.mesh.comm
-        self._geo = self._sum([fem.form(f * face) for f in (1.0 + 0.0 * x[0], dy_ ** 2,
-                                                              dx_ ** 2)])
+        self._geo = face_geometry(md, names, centre)
         self._forms = [fem.form(f * face, entity_maps=em) for f in
                        (u[0], u[1], u[2], dy_ * u[2], dx_ * u[2], dx_ * u[1] - dy_ * u[0])]
 

@@ -262,12 +262,13 @@ class BiotProblem(MonolithicAlgebra):
         owned = dofs[dofs < b.V.dofmap.index_map.size_local * 3]
         return self.block_resultant(owned, self.bodies.index(b))
 
-    def interface_force(self) -> tuple[np.ndarray, np.ndarray]:
-        """(owned structure node coordinates (n, 3) m, the soil's force on them (n, 3) kN).
+    def interface_force(self) -> np.ndarray:
+        """The soil's force (kN) on each owned node of the structure, ``(n, 3)``.
 
-        The force the soil exerts on the structure through the pile-soil interface (effective
-        traction and pore pressure) at the current state, per owned node of the structure's
-        displacement space; piles tied to the soil have no interface (an error).
+        Through the pile-soil interface (effective traction and pore pressure) at the current
+        state; row ``i`` is owned node ``i`` of the structure's displacement space (coordinates:
+        ``body("structure").V.tabulate_dof_coordinates()``). Piles tied to the soil have no
+        interface (an error).
         """
         if self.interface is None:
             raise SolverInputError("interface_force: the piles are tied to the soil (no "
@@ -279,7 +280,7 @@ class BiotProblem(MonolithicAlgebra):
         vec = fem.assemble_vector(self._itf_force)
         vec.scatter_reverse(la.InsertMode.add)
         n = V.dofmap.index_map.size_local
-        return V.tabulate_dof_coordinates()[:n], vec.array[: 3 * n].reshape(n, 3)
+        return vec.array[: 3 * n].reshape(n, 3)
 
     def block_resultant(self, owned: np.ndarray, body: int) -> float:
         """Sum (kN) of body ``body``'s unconstrained residual over owned dofs ``owned``."""

@@ -10,15 +10,12 @@ them.
 
 from __future__ import annotations
 
-import ufl
-from dolfinx import fem
-from mpi4py import MPI
-
 from pilegroup.geometry import groups
 from pilegroup.geometry.adapter import ResolvedGeometry
 from pilegroup.geometry.meshdata import MeshData
 from pilegroup.model import Scenario
 from pilegroup.solver import FaceAction
+from pilegroup.solver.probes import face_geometry
 
 #: The components a face action carries (the vertical force is the load factor's pressure).
 LATERAL = (0, 1, 3, 4, 5)
@@ -56,13 +53,8 @@ def face_properties(md: MeshData, names: list[str], centre: tuple[float, float, 
     A symmetry-reduced mesh holds ``fraction`` of a face symmetric about its cut planes
     (through the centre), so the whole face's values are the meshed ones over ``fraction``.
     """
-    ds = ufl.Measure("ds", domain=md.mesh, subdomain_data=md.facet_tags)
-    area = sum((ds(md.facet_tag(n)) for n in names[1:]), start=ds(md.facet_tag(names[0])))
-    x = ufl.SpatialCoordinate(md.mesh)
-    vals = [fem.assemble_scalar(fem.form(f * area)) for f in
-            (1.0 + 0.0 * x[0], (x[1] - centre[1]) ** 2, (x[0] - centre[0]) ** 2)]
-    a, ixx, iyy = (md.mesh.comm.allreduce(v, op=MPI.SUM) / fraction for v in vals)
-    return float(a), float(ixx), float(iyy)
+    area, ixx, iyy = face_geometry(md, names, centre)
+    return area / fraction, ixx / fraction, iyy / fraction
 
 
 def face_actions(sc: Scenario, geo: ResolvedGeometry, md: MeshData) -> list[FaceAction]:

@@ -110,30 +110,44 @@ class PileSections:
         self._form = fem.form(ufl.inner(vals, ufl.TestFunction(D)) * dx)
         self.rows: dict[str, list[str]] = {"bending": [], "heads": [], "max": []}
         self._zero: dict[str, np.ndarray] = {}
+        self._nodes = self._pile_nodes(body.V) if pb.interface is not None else {}
+
+    def _pile_nodes(self, V: fem.FunctionSpace) -> dict[int, tuple[np.ndarray, np.ndarray]]:
+        """Meshed pile -> (its owned structure nodes, their arms from the head centre, m)."""
+        x = V.tabulate_dof_coordinates()[: V.dofmap.index_map.size_local]
+        out = {}
+        for i in self.fraction:
+            xp, yp = self.xy[i - 1]
+            on = np.flatnonzero(np.hypot(x[:, 0] - xp, x[:, 1] - yp)
+                                <= self.radius[i - 1] * 1.001 + _TOL)
+            out[i] = (on, x[on] - np.array([xp, yp, 0.0]))
+        return out
 
     # ------------------------------------------------------------------ quantities
     def sections(self) -> dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]]:
         """Meshed pile -> (depths, (n, 6) section actions Vx, Vy, -N, Mx, My, T, (n, 2) ux, uy).
 
-        Of the meshed part of the pile (collective).
+        Of the meshed part of the pile (collective: one all-reduce for every pile).
         """
         cellvals = fem.assemble_vector(self._form).array.reshape(-1, 9)
-        out = {}
+        levels, local = {}, []
         for i in self.fraction:
-            cells, zc, levels = self.piles.element_layers(i)
+            cells, zc, levels[i] = self.piles.element_layers(i)
             below = zc < 0.0
-            k = np.searchsorted(-levels, -zc[below])
-            acc = np.zeros((levels.size, 9))
-            np.add.at(acc, k, cellvals[cells[below]])
-            acc = self.comm.allreduce(acc, op=MPI.SUM)
-            dz = PileProbe.layer_heights(levels)[:, None]
+            acc = np.zeros((levels[i].size, 9))
+            np.add.at(acc, np.searchsorted(-levels[i], -zc[below]), cellvals[cells[below]])
+            local.append(acc)
+        sums = np.split(self.comm.allreduce(np.concatenate(local), op=MPI.SUM),
+                        np.cumsum([a.shape[0] for a in local])[:-1])
+        out = {}
+        for i, acc in zip(self.fraction, sums, strict=True):
+            S = acc / PileProbe.layer_heights(levels[i])[:, None]
             vol = np.where(acc[:, 8:9] > 0.0, acc[:, 8:9], 1.0)
             xp, yp = self.xy[i - 1]
-            S = acc / dz
             act = np.column_stack([S[:, 0], S[:, 1], S[:, 2], S[:, 4] - yp * S[:, 2],
                                    -(S[:, 3] - xp * S[:, 2]),
                                    S[:, 5] - xp * S[:, 1] + yp * S[:, 0]])
-            out[i] = (-levels, act, acc[:, 6:8] / vol)
+            out[i] = (-levels[i], act, acc[:, 6:8] / vol)
         return out
 
     def heads(self) -> dict[int, np.ndarray]:
@@ -142,21 +156,21 @@ class PileSections:
         Minus the soil's force and moment (about the head centre) through the interface on the
         pile's nodes (collective).
         """
-        x, f = self.pb.interface_force()
-        out = {}
-        for i in self.fraction:
-            xp, yp = self.xy[i - 1]
-            on = np.hypot(x[:, 0] - xp, x[:, 1] - yp) <= self.radius[i - 1] * 1.001 + _TOL
-            arm = x[on] - np.array([xp, yp, 0.0])
-            loc = np.concatenate([f[on].sum(axis=0), np.cross(arm, f[on]).sum(axis=0)])
-            out[i] = -self.comm.allreduce(loc, op=MPI.SUM)
-        return out
+        f = self.pb.interface_force()
+        loc = np.array([np.concatenate([f[on].sum(axis=0), np.cross(arm, f[on]).sum(axis=0)])
+                        for on, arm in self._nodes.values()])
+        tot = -self.comm.allreduce(loc, op=MPI.SUM)
+        return dict(zip(self._nodes, tot, strict=True))
 
-    def _whole(self, i: int, values: dict[int, Any], table: dict[str, tuple[int, ...]]
-               ) -> np.ndarray:
-        """Pile ``i`` of the whole foundation from its meshed image's ``values``."""
+    def _whole(self, i: int, v: np.ndarray, table: dict[str, tuple[int, ...]],
+               share: bool = True) -> np.ndarray:
+        """Pile ``i`` of the whole foundation from the value ``v`` of its meshed image.
+
+        ``share``: ``v`` is the meshed part's share of a resultant (over the meshed fraction);
+        else a mean, the same for the whole pile.
+        """
         src = self.source[i]
-        v = np.asarray(values[src], dtype=float) / self.fraction[src]
+        v = np.asarray(v, dtype=float) / (self.fraction[src] if share else 1.0)
         return _symmetrise(v, _on_planes(self.planes, self.xy[src - 1]),
                            _sign_flips(self.planes, self.xy[i - 1], self.xy[src - 1]), table)
 
@@ -170,15 +184,15 @@ class PileSections:
         heads = self.heads() if self.pb.interface is not None else None
         for i in range(1, len(self.xy) + 1):
             depth, act, defl = secs[self.source[i]]
-            act = self._change(f"s{i}", self._whole(i, {self.source[i]: act}, ANTISYMMETRIC))
-            defl = self._whole(i, {self.source[i]: defl * self.fraction[self.source[i]]},
-                               _DEFLECTION_ANTISYMMETRIC)
+            act = self._change(f"s{i}", self._whole(i, act, ANTISYMMETRIC))
+            defl = self._whole(i, defl, _DEFLECTION_ANTISYMMETRIC, share=False)
             self.rows["bending"] += [
                 f"{t:.6g},{i},{d:.6g},{-a[2]:.9g},{a[0]:.9g},{a[1]:.9g},{a[3]:.9g},{a[4]:.9g},"
                 f"{a[5]:.9g},{u[0]:.9g},{u[1]:.9g}" for d, a, u in zip(depth, act, defl,
                                                                       strict=True)]
             if heads is not None:
-                head = self._change(f"h{i}", self._whole(i, heads, ANTISYMMETRIC))
+                head = self._change(f"h{i}", self._whole(i, heads[self.source[i]],
+                                                         ANTISYMMETRIC))
                 hd = 0.0
             else:
                 head, hd = act[0], depth[0]
