@@ -23,6 +23,8 @@ from pilegroup.validate import require_finite
 
 #: Component names in order (the columns of the action vectors).
 COMPONENTS = ("Fx", "Fy", "Fz", "Mx", "My", "Mz")
+#: The components other than the vertical force: horizontal forces, moments, torque.
+LATERAL = (0, 1, 3, 4, 5)
 #: Components that change sign under the mirror about the plane ``axis`` = 0 (a force normal
 #: to the plane; the moments about the two axes in it): a load symmetric about the plane has
 #: them zero.
@@ -61,4 +63,4 @@ def held_actions(stage_values: Sequence[Sequence[float | None]]) -> list[np.ndar
     return out
 
 
-__all__ = ["ANTISYMMETRIC", "COMPONENTS", "Actions", "held_actions", "transfer"]
+__all__ = ["ANTISYMMETRIC", "COMPONENTS", "LATERAL", "Actions", "held_actions", "transfer"]

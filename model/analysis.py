@@ -202,6 +202,15 @@ class Stage:
             raise ScenarioError("Fz_kN", self.Fz_kN, "must be <= 0 (z is up: a downward load is"
                                 " negative; uplift of the foundation is not modelled)", "kN")
 
+    def given_actions(self) -> tuple[float | None, ...]:
+        """Load stage: the six actions it gives, ``ACTION_KEYS`` order, ``Fz = -vertical``.
+
+        ``None`` where it gives none (the value before is held).
+        """
+        v = self.vertical_kN
+        return tuple((None if v is None else -v) if k == "Fz_kN" else getattr(self, k)
+                     for k in ACTION_KEYS)
+
     @property
     def vertical_kN(self) -> float | None:
         """Load stage: the vertical load at its end, kN, downward positive (else ``None``)."""

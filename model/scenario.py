@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from pilegroup.errors import ScenarioError
-from pilegroup.model.actions import Actions, held_actions, transfer
+from pilegroup.model.actions import LATERAL, Actions, held_actions, transfer
 from pilegroup.model.analysis import (
     ACTION_KEYS,
     InterfaceOptions,
@@ -364,15 +364,13 @@ class Scenario:
         held from the stage before (pilegroup.model.actions).
         """
         idx = [i for i, st in enumerate(self.stages) if st.kind == "load"]
-        given = [[None if k == "Fz_kN" and self.stages[i].vertical_kN is None else
-                  (-self.stages[i].vertical_kN if k == "Fz_kN" else  # type: ignore[operator]
-                   getattr(self.stages[i], k)) for k in ACTION_KEYS] for i in idx]
+        given = [self.stages[i].given_actions() for i in idx]
         P, C = self.action_point(), self.load_centre()
         return [(i, transfer(a, P, C)) for i, a in zip(idx, held_actions(given), strict=True)]
 
     def has_lateral_actions(self) -> bool:
         """Whether any load stage puts a horizontal force or a moment on the loaded face."""
-        return any(np.any(np.abs(a[[0, 1, 3, 4, 5]]) > 0.0) for _, a in self.cap_actions())
+        return any(np.any(a[list(LATERAL)] != 0.0) for _, a in self.cap_actions())
 
     def _check_actions(self) -> None:
         """Horizontal forces and moments need one loaded face: a cap, or a single pile.
@@ -382,8 +380,8 @@ class Scenario:
         """
         if self.cap is None and self.piles.count > 1:
             for i, a in self.cap_actions():
-                if np.any(np.abs(a[[0, 1, 3, 4, 5]]) > 0.0):
-                    k = next(k for k in (0, 1, 3, 4, 5) if abs(a[k]) > 0.0)
+                k = next((k for k in LATERAL if a[k] != 0.0), None)
+                if k is not None:
                     raise ScenarioError(
                         f"stages[{i}].{ACTION_KEYS[k]}", float(a[k]),
                         "horizontal forces and moments need a cap to share them between the "

@@ -239,6 +239,14 @@ class Installation:
 RAKE_WORDS = ("rake", "batter", "inclin", "tilt", "angle", "azimuth")
 
 
+def _check_pile_size(table: str, diameter: float | None, length: float | None) -> None:
+    """A pile's ``diameter_m`` and ``length_in_soil_m``, where given: positive, in bounds."""
+    for key, value in (("diameter_m", diameter), ("length_in_soil_m", length)):
+        if value is not None:
+            require_positive(key, value, "m")
+            check_bound(f"{table}.{key}", value)
+
+
 @dataclass(frozen=True)
 class LayoutPile:
     """One entry of ``piles.layout``: a vertical pile at ``(x_m, y_m)`` (m, plan coordinates).
@@ -256,12 +264,7 @@ class LayoutPile:
     def __post_init__(self) -> None:
         require_finite("x_m", self.x_m, "m")
         require_finite("y_m", self.y_m, "m")
-        if self.diameter_m is not None:
-            require_positive("diameter_m", self.diameter_m, "m")
-            check_bound("piles.layout.diameter_m", self.diameter_m)
-        if self.length_in_soil_m is not None:
-            require_positive("length_in_soil_m", self.length_in_soil_m, "m")
-            check_bound("piles.layout.length_in_soil_m", self.length_in_soil_m)
+        _check_pile_size("piles.layout", self.diameter_m, self.length_in_soil_m)
 
     @classmethod
     def unknown_key_message(cls, key: str) -> str:
@@ -305,12 +308,7 @@ class Piles:
     """Installation pore pressures present at the start (None: wished in place, no excess)."""
 
     def __post_init__(self) -> None:
-        if self.diameter_m is not None:
-            require_positive("diameter_m", self.diameter_m, "m")
-            check_bound("piles.diameter_m", self.diameter_m)
-        if self.length_in_soil_m is not None:
-            require_positive("length_in_soil_m", self.length_in_soil_m, "m")
-            check_bound("piles.length_in_soil_m", self.length_in_soil_m)
+        _check_pile_size("piles", self.diameter_m, self.length_in_soil_m)
         require_non_negative("embedment_m", self.embedment_m, "m")
         self._check_layout()
         self._check_sizes()

@@ -53,7 +53,10 @@ positive down; forces kN; stresses kPa; displacements m.
   section actions (the part above on the part below) and lateral deflection at the element
   layers' mid-heights;
 * ``pile_max_moment.csv``: ``t_day,pile,M_max_kNm,depth_m``: the largest resultant bending
-  moment ``sqrt(Mx^2 + My^2)`` of each pile (head included) and its depth.
+  moment ``sqrt(Mx^2 + My^2)`` of each pile (head included) and its depth;
+* ``cap_stiffness.csv`` (runs with ``outputs.cap_stiffness``): ``action,ux_m,uy_m,uz_m,rx_rad,
+  ry_rad,rz_rad``: rows ``Fx`` .. ``Mz`` of the cap's 6 x 6 stiffness matrix about the action
+  point, ``K[i, j] = dF_i / du_j`` (:mod:`pilegroup.studies.run.stiffness`).
 
 The conventions of the last three are those of :mod:`pilegroup.studies.run.section_probe`;
 every value is the change since the geostatic state.
@@ -83,6 +86,7 @@ CAP_MOTION_CSV = "cap_motion.csv"
 HEADS_CSV = "pile_heads.csv"
 BENDING_CSV = "pile_bending.csv"
 MAX_MOMENT_CSV = "pile_max_moment.csv"
+STIFFNESS_CSV = "cap_stiffness.csv"
 
 _LAYER_MEANS = ("t_day", "pile", "layer", "layer_name", "depth_top_m", "depth_bottom_m",
                 "shaft_friction_kPa", "relative_displacement_m", "viscoplastic_slip_m",
@@ -113,9 +117,10 @@ COLUMNS: dict[str, tuple[str, ...]] = {
     BENDING_CSV: ("t_day", "pile", "depth_m", "N_kN", "Vx_kN", "Vy_kN", "Mx_kNm", "My_kNm",
                   "T_kNm", "ux_m", "uy_m"),
     MAX_MOMENT_CSV: ("t_day", "pile", "M_max_kNm", "depth_m"),
+    STIFFNESS_CSV: ("action", "ux_m", "uy_m", "uz_m", "rx_rad", "ry_rad", "rz_rad"),
 }
 #: The columns that hold text; all others hold numbers.
-TEXT_COLUMNS = frozenset({"stage", "layer_name"})
+TEXT_COLUMNS = frozenset({"stage", "layer_name", "action"})
 
 #: Header lines of the writers.
 SETTLEMENT_COLUMNS = ",".join(COLUMNS[SETTLEMENT_CSV])
@@ -132,6 +137,7 @@ CAP_MOTION_COLUMNS = ",".join(COLUMNS[CAP_MOTION_CSV])
 HEAD_COLUMNS = ",".join(COLUMNS[HEADS_CSV])
 BENDING_COLUMNS = ",".join(COLUMNS[BENDING_CSV])
 MAX_MOMENT_COLUMNS = ",".join(COLUMNS[MAX_MOMENT_CSV])
+STIFFNESS_COLUMNS = ",".join(COLUMNS[STIFFNESS_CSV])
 #: The value columns of ``gauges.csv`` (after time, pile, section and depth).
 GAUGE_VALUES = COLUMNS[GAUGES_CSV][4:]
 

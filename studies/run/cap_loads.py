@@ -14,11 +14,9 @@ from pilegroup.geometry import groups
 from pilegroup.geometry.adapter import ResolvedGeometry
 from pilegroup.geometry.meshdata import MeshData
 from pilegroup.model import Scenario
+from pilegroup.model.actions import LATERAL
 from pilegroup.solver import FaceAction
 from pilegroup.solver.probes import face_geometry
-
-#: The components a face action carries (the vertical force is the load factor's pressure).
-LATERAL = (0, 1, 3, 4, 5)
 
 
 def loaded_facets(sc: Scenario, md: MeshData) -> list[str]:
@@ -81,5 +79,5 @@ def stage_amplitudes(sc: Scenario) -> dict[int, tuple[float, ...]]:
             for i, a in sc.cap_actions()}
 
 
-__all__ = ["LATERAL", "face_actions", "face_properties", "first_slot", "loaded_facets",
+__all__ = ["face_actions", "face_properties", "first_slot", "loaded_facets",
            "stage_amplitudes", "used_components"]

@@ -54,7 +54,7 @@ from pilegroup.solver import (
 )
 from pilegroup.solver.probes import facet_area
 from pilegroup.studies.results.records import SOLVER_SUMMARY_JSON, RunSummary
-from pilegroup.studies.results.tables import GAUGES_CSV
+from pilegroup.studies.results.tables import GAUGES_CSV, STIFFNESS_CSV
 from pilegroup.studies.run.auto_preset import scenario_preset
 from pilegroup.studies.run.cap_loads import (
     face_actions,
@@ -69,7 +69,7 @@ from pilegroup.studies.run.gauge_probe import GaugeProbe
 from pilegroup.studies.run.ground_probe import GroundProbe
 from pilegroup.studies.run.pile_probe import LoadSettlementCurve, PileProbe, SettlementSeries
 from pilegroup.studies.run.section_probe import CapMotion, PileSections
-from pilegroup.studies.run.stiffness import STIFFNESS_CSV, cap_stiffness, write_cap_stiffness
+from pilegroup.studies.run.stiffness import cap_stiffness, write_cap_stiffness
 
 log = logging.getLogger(__name__)
 

@@ -27,11 +27,10 @@ from pilegroup.fileio import write_text_atomic
 from pilegroup.model import Scenario
 from pilegroup.model.actions import COMPONENTS, transfer
 from pilegroup.solver import BiotProblem, SolverStage
-from pilegroup.studies.results.tables import CAP_MOTION_CSV, COLUMNS
+from pilegroup.studies.results.tables import STIFFNESS_COLUMNS
 from pilegroup.studies.run.cap_loads import first_slot
 from pilegroup.studies.run.section_probe import CapMotion
 
-STIFFNESS_CSV = "cap_stiffness.csv"
 #: Probe size: this fraction of the vertical load (at least 1 kN); moments times the face size.
 PROBE_FRACTION = 1e-2
 
@@ -95,11 +94,11 @@ def cap_stiffness(sc: Scenario, pb: BiotProblem, motion: CapMotion,
 
 def write_cap_stiffness(path: Path, K: np.ndarray) -> None:
     """``cap_stiffness.csv`` (module docstring); call on one rank."""
-    head = ",".join(("action", *COLUMNS[CAP_MOTION_CSV][1:]))
+    head = STIFFNESS_COLUMNS
     rows = [f"{c}," + ",".join(f"{v:.9g}" for v in row) for c, row in zip(COMPONENTS, K,
                                                                           strict=True)]
     write_text_atomic(path, "\n".join([head, *rows]) + "\n")
 
 
-__all__ = ["STIFFNESS_CSV", "cap_stiffness", "probe_sizes", "scenario_until",
+__all__ = ["cap_stiffness", "probe_sizes", "scenario_until",
            "write_cap_stiffness"]
