@@ -33,14 +33,6 @@ def lateral_group_text(single_pile: str) -> str:
                      "\n\n[structure]"))
 
 
-def _run(run_cli, tmp: Path, text: str, name: str, symmetry: str, ranks: int = 1) -> Path:
-    f = tmp / "group.toml"
-    f.write_text(text)
-    r = run_cli(f, tmp / name, ranks, [f"numerics.symmetry='{symmetry}'"], timeout=900)
-    assert r.returncode == 0, r.stderr[-3000:]
-    return tmp / name
-
-
 def _table(path: Path) -> dict[str, np.ndarray]:
     with path.open() as fh:
         rows = list(csv.DictReader(fh))
@@ -76,12 +68,12 @@ def group(small_pile_source):
 
 
 @pytest.fixture(scope="module")
-def full_run(run_cli, tmp_path_factory, group):
-    return _run(run_cli, tmp_path_factory.mktemp("lateral_full"), group, "full", "none")
+def full_run(run_symmetry, tmp_path_factory, group):
+    return run_symmetry(tmp_path_factory.mktemp("lateral_full"), group, "full", "none")
 
 
-def test_half_matches_full_and_heads_balance(run_cli, full_run, group, tmp_path):
-    half = _run(run_cli, tmp_path, group, "half", "auto")
+def test_half_matches_full_and_heads_balance(run_symmetry, full_run, group, tmp_path):
+    half = run_symmetry(tmp_path, group, "half", "auto")
     _compare(full_run, half)
     _balance(full_run)
     _balance(half)
@@ -92,13 +84,13 @@ def test_half_matches_full_and_heads_balance(run_cli, full_run, group, tmp_path)
 
 
 @pytest.mark.mpi
-def test_half_under_mpirun_matches_full(run_cli, full_run, group, tmp_path):
-    half = _run(run_cli, tmp_path, group, "half", "auto", ranks=2)
+def test_half_under_mpirun_matches_full(run_symmetry, full_run, group, tmp_path):
+    half = run_symmetry(tmp_path, group, "half", "auto", ranks=2)
     _compare(full_run, half)
     _balance(half)
 
 
-def test_stiffness_matrix_of_a_pile_head(run_cli, small_pile, tmp_path):
+def test_stiffness_matrix_of_a_pile_head(small_pile, tmp_path):
     """``pilegroup stiffness``: positive diagonal, symmetric (Betti) to 1 %, full model."""
     import subprocess
     import sys

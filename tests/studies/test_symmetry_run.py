@@ -29,14 +29,6 @@ def group_text(single_pile: str) -> str:
         .replace("far_field_size_m = 8.0", "far_field_size_m = 2.0")
 
 
-def _run(run_cli, tmp: Path, text: str, name: str, symmetry: str, ranks: int = 1) -> Path:
-    f = tmp / "group.toml"
-    f.write_text(text)
-    r = run_cli(f, tmp / name, ranks, [f"numerics.symmetry='{symmetry}'"], timeout=900)
-    assert r.returncode == 0, r.stderr[-3000:]
-    return tmp / name
-
-
 def _rows(path: Path) -> list[dict[str, str]]:
     with path.open() as fh:
         return list(csv.DictReader(fh))
@@ -78,14 +70,14 @@ def group(small_pile_source):
 
 
 @pytest.fixture(scope="module")
-def full_run(run_cli, tmp_path_factory, group):
-    return _run(run_cli, tmp_path_factory.mktemp("group_full"), group, "full", "none")
+def full_run(run_symmetry, tmp_path_factory, group):
+    return run_symmetry(tmp_path_factory.mktemp("group_full"), group, "full", "none")
 
 
-def test_quarter_matches_full(run_cli, full_run, group, tmp_path):
-    _compare(full_run, _run(run_cli, tmp_path, group, "quarter", "quarter"))
+def test_quarter_matches_full(run_symmetry, full_run, group, tmp_path):
+    _compare(full_run, run_symmetry(tmp_path, group, "quarter", "quarter"))
 
 
 @pytest.mark.mpi
-def test_quarter_under_mpirun_matches_full(run_cli, full_run, group, tmp_path):
-    _compare(full_run, _run(run_cli, tmp_path, group, "quarter", "quarter", ranks=2))
+def test_quarter_under_mpirun_matches_full(run_symmetry, full_run, group, tmp_path):
+    _compare(full_run, run_symmetry(tmp_path, group, "quarter", "quarter", ranks=2))
