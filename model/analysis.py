@@ -347,11 +347,20 @@ class LinearSolver:
     measured fastest for the system's model part, interface and size
     (``studies.run.auto_preset.AUTO_TABLE``, docs/solver.md); a failing ``fieldsplit_gamg``,
     ``fieldsplit_pier`` or ``fieldsplit_kept`` falls back to ``direct_reuse``.
+
+    ``krylov_forcing``: inexact Newton (presets whose Krylov solve supports it, e.g.
+    ``direct_reuse``): a Newton correction's Krylov solve stops once every block's linear
+    residual is below this fraction of the block's Newton tolerance; 0: every solve to the
+    preset's relative tolerance (docs/solver.md, "Inexact Newton").
     """
 
     preset: Literal["auto", "direct", "direct_reuse", "fieldsplit_gamg", "fieldsplit_pier",
                     "fieldsplit_kept"] = "auto"
     options: dict[str, str | int | float | bool] = field(default_factory=dict)
+    krylov_forcing: float = 0.1
+
+    def __post_init__(self) -> None:
+        check_bound("numerics.solver.krylov_forcing", self.krylov_forcing)
 
 
 #: Values of ``numerics.symmetry``.

@@ -114,6 +114,8 @@ BOUNDS: dict[str, Bound] = {
     "numerics.time.max_newton": Bound(1, 1000, "-", "Newton converges in ~5-20 iterations or not"),
     "numerics.newton_rtol": Bound(1.0e-14, 0.1, "-",
                                   "above machine precision; below 10 % of the first residual"),
+    "numerics.solver.krylov_forcing": Bound(
+        0.0, 0.5, "-", "the linear residual a fraction of what Newton accepts; 0: the preset's"),
     "numerics.newton_atol": Bound(0.0, 1.0e3, "-", "residual units kN and m^3", lo_open=True),
     "numerics.mesh.size_m": Bound(0.01, 10.0, "m",
                                   "the paper's mesh study uses 0.1-1 m; also <= 5 x pile diameter"),

@@ -40,6 +40,7 @@ class MonolithicAlgebra:
                 spec.band_layers if opts.band_layers is None else opts.band_layers))
         self._matrix_key: float | None = None  # dt of the assembled matrix (linear reuse)
         self._itf_is: list[PETSc.IS] | None = None  # index sets for the interface's matrix
+        self._row_weights: PETSc.Vec | None = None  # inexact Newton's block weights
 
     def dirichlet_response(self, bcs: list[fem.DirichletBC], out: PETSc.Vec) -> None:
         """Solve the Newton system for the lifting of the conditions ``bcs`` into ``out``.
@@ -140,10 +141,24 @@ class MonolithicAlgebra:
             return False
         return self.linear_solver.fall_back(reason)
 
-    def solve_linear(self, rhs: PETSc.Vec, sol: PETSc.Vec) -> int:
-        """Solve with the current Jacobian; returns the Krylov iterations."""
+    def solve_linear(self, rhs: PETSc.Vec, sol: PETSc.Vec,
+                     block_tol: np.ndarray | None = None) -> int:
+        """Solve with the current Jacobian; returns the Krylov iterations.
+
+        ``block_tol``: the residual norm each block may keep (inexact Newton), given to the
+        linear solver as row weights ``1 / block_tol`` (block by block).
+        """
         t0 = time.perf_counter()
-        its = self.linear_solver.solve(rhs, sol, self.undrained)
+        weights = None
+        if block_tol is not None and self.linear_solver.forcing:
+            if self._row_weights is None:
+                self._row_weights = fpetsc.create_vector(self.spaces)
+            weights = self._row_weights
+            off0, _ = weights.getAttr("_blocks")  # owned range of each block
+            w = weights.array
+            for i, tol in enumerate(block_tol):
+                w[off0[i]:off0[i + 1]] = 1.0 / max(tol, 1e-30)
+        its = self.linear_solver.solve(rhs, sol, self.undrained, weights)
         self.timings["solve"] += time.perf_counter() - t0
         return its
 

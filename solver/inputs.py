@@ -245,15 +245,15 @@ class NewtonOptions:
     """Newton settings.
 
     Attributes:
-        rtol: relative residual tolerance per block (u and p), against the largest first
-            residual seen so far in the run.
+        rtol: relative residual tolerance per block, against its largest first residual so far.
         atol: absolute residual tolerance (kN for u, m^3 for p).
-        stol: relative increment tolerance (alternative acceptance when the residual has
-            reached round-off).
+        stol: relative increment tolerance (acceptance once the residual reached round-off).
         max_it: iteration limit; beyond it the step fails (and is cut back).
         line_search: maximum number of step halvings of the backtracking line search on the
             scaled residual norm (0: plain Newton); it only acts when a full step does not
             decrease the residual (e.g. return-mapping branch cycling in perfect plasticity).
+        krylov_forcing: inexact Newton: Krylov solves stop at this fraction of each block's
+            Newton tolerance (``Preset.forcing``); 0: the preset's own tolerance (docs/solver.md).
     """
 
     rtol: float = 1e-9
@@ -261,6 +261,11 @@ class NewtonOptions:
     stol: float = 1e-12
     max_it: int = 15
     line_search: int = 4
+    krylov_forcing: float = 0.1
+
+    def __post_init__(self) -> None:
+        require_in_range("krylov_forcing", self.krylov_forcing, 0.0, 1.0, "-", hi_open=True,
+                         error=SolverInputError)
 
 
 @dataclass(frozen=True)

@@ -13,6 +13,9 @@ geostatic state included), the plate force and those residuals, because the bodi
 their forces through the interface, whose imbalance shows in both (as ABAQUS takes one
 time-averaged force per field). Or: the increment is below ``stol`` times the solution, block
 by block. A step never accepts a non-converged state.
+
+Inexact Newton: each correction's linear solve may stop once every block's linear residual is
+below ``krylov_forcing`` times that block's tolerance (``NewtonOptions.krylov_forcing``).
 """
 
 from __future__ import annotations
@@ -54,7 +57,7 @@ class NewtonSolver:
                     info.message = f"no convergence in {nw.max_it} iterations; |r| = {rn}"
                     break
                 pb.assemble_jacobian()
-                its = pb.solve_linear(pb.b, pb.dx)
+                its = pb.solve_linear(pb.b, pb.dx, self._linear_tolerance(ref))
                 info.ksp_its += its
                 info.ksp_max = max(info.ksp_max, its)
                 dU = pb.plate.border(pb, load_factor) if pb.plate is not None else 0.0
@@ -88,6 +91,18 @@ class NewtonSolver:
         ref[u_blocks] = np.max(ref[u_blocks])
         self.R_run = np.maximum(self.R_run, ref)
         return ref
+
+    def _linear_tolerance(self, ref: np.ndarray) -> np.ndarray | None:
+        """Largest linear residual of each block a correction may leave (inexact Newton).
+
+        ``krylov_forcing`` times the block's Newton tolerance; ``None`` (solve to the
+        preset's own tolerance) without forcing or with a force-controlled plate, whose
+        force test sums the residual over the plate's dofs.
+        """
+        nw = self.options
+        if nw.krylov_forcing <= 0.0 or self.problem.plate is not None:
+            return None
+        return nw.krylov_forcing * (nw.rtol * ref + nw.atol)
 
     def _small(self, rn: np.ndarray, gap: float, ref: np.ndarray, load_factor: float) -> bool:
         """Residual test of every block (and of the plate force)."""

@@ -116,8 +116,13 @@ class StepProblem(Protocol):
         """Assemble the Newton matrix (``force``: even when it could be kept)."""
         ...
 
-    def solve_linear(self, rhs: PETSc.Vec, sol: PETSc.Vec) -> int:
-        """Solve the Newton system for ``rhs`` into ``sol``; returns the Krylov iterations."""
+    def solve_linear(self, rhs: PETSc.Vec, sol: PETSc.Vec,
+                     block_tol: np.ndarray | None = None) -> int:
+        """Solve the Newton system for ``rhs`` into ``sol``; returns the Krylov iterations.
+
+        ``block_tol``: the largest residual norm each block may keep (an inexact solve, where
+        the linear solver supports it); ``None``: the solver's own tolerance.
+        """
         ...
 
     def force_scales(self) -> list[float]:

@@ -141,7 +141,8 @@ def build_problem(sc: Scenario, geo: ResolvedGeometry, md: MeshData, preset: str
     disc = Discretisation(sc.numerics.element)
     p = scenario_preset(sc, geo.symmetry, estimate_dofs(md, sc.numerics.element), preset)
     num = sc.numerics
-    newton = NewtonOptions(rtol=num.newton_rtol, atol=num.newton_atol, max_it=num.time.max_newton)
+    newton = NewtonOptions(rtol=num.newton_rtol, atol=num.newton_atol, max_it=num.time.max_newton,
+                           krylov_forcing=num.solver.krylov_forcing)
     h = geo.spec.sizing.h_pile
     opts = SolverOptions(preset=p, overrides=dict(num.solver.options), newton=newton,
                          band_layers=band_layers(h))

@@ -3,6 +3,7 @@ and the run gives the ``direct`` answer (GMRES on the exact Jacobian, rtol 1e-10
 
 import dataclasses
 
+import numpy as np
 import pytest
 from mpi4py import MPI
 
@@ -33,3 +34,56 @@ def test_direct_reuse_matches_direct(tmp_path, monkeypatch, mode, small_pile):
     assert newton_reuse == newton_direct  # Newton itself is unchanged
     assert 1 <= factors < newton_reuse  # fewer factorisations than Newton iterations
     assert factors_direct >= newton_direct  # direct: one per assembled Newton matrix
+
+
+def _small_problem(small_pile, tmp_path, monkeypatch, forcing=0.1):
+    monkeypatch.setenv("PILEGROUP_MESH_CACHE", str(tmp_path / "cache"))
+    sc = load_scenario(small_pile)
+    num = sc.numerics
+    sc = dataclasses.replace(sc, interface=dataclasses.replace(sc.interface, mode="viscoplastic"),
+                             numerics=dataclasses.replace(num, solver=dataclasses.replace(
+                                 num.solver, krylov_forcing=forcing)))
+    md = build_mesh(geometry_spec(sc), MPI.COMM_WORLD)
+    return sc, md, pier.build_problem(sc, resolve_geometry(sc), md, "direct_reuse")
+
+
+def test_forced_solve_leaves_each_block_within_its_tolerance(tmp_path, monkeypatch, small_pile):
+    """Inexact Newton: the weighted GMRES solve stops with every block's true residual below
+    its own bound, in fewer iterations than the preset's rtol 1e-10, and the Jacobian is
+    restored after the weighting."""
+    _, _, pb = _small_problem(small_pile, tmp_path, monkeypatch)
+    pb.set_step(0.5, 0.5)
+    pb.residual_state(0.5)
+    pb.assemble_jacobian()
+    pb.solve_linear(pb.b, pb.dx)  # factorises this Jacobian, kept for the next ones
+    pb.set_step(2.0, 0.7)  # another step size and load: a new Jacobian, the LU kept
+    rn, _ = pb.residual_state(0.7)
+    pb.assemble_jacobian()
+    norm_A = pb.A.norm()
+    full = pb.b.duplicate()
+    its_full = pb.solve_linear(pb.b, full)  # no bounds: rtol 1e-10
+    block_tol = 1e-4 * rn + 1e-12  # as Newton gives them: never zero
+    its = pb.solve_linear(pb.b, pb.dx, block_tol)
+    r = pb.b.duplicate()
+    pb.A.mult(pb.dx, r)
+    r.aypx(-1.0, pb.b)  # b - A dx
+    r.setAttr("_blocks", pb.b.getAttr("_blocks"))
+    assert np.all(pb.block_norms(r) <= block_tol)
+    assert its < its_full
+    assert pb.A.norm() == pytest.approx(norm_A, rel=1e-13)
+
+
+def test_forcing_keeps_newton_and_the_answer(tmp_path, monkeypatch, small_pile):
+    """A run with ``krylov_forcing = 0.1`` takes the Newton iterations of one solved to the
+    preset's tolerance (``krylov_forcing = 0``) and gives its settlement to the Newton
+    tolerance (rtol 1e-8), with fewer Krylov iterations."""
+    out = {}
+    for forcing in (0.0, 0.1):
+        sc, md, pb = _small_problem(small_pile, tmp_path, monkeypatch, forcing)
+        probe = SettlementProbe(pb, pier.loaded_facets(sc, md))
+        log = run_stages(pb, pier.solver_stages(sc), pier.time_stepping(sc),
+                         geostatic_tol=pier.GEOSTATIC_TOL_M)
+        out[forcing] = (probe(), log.newton_total, sum(s.ksp_its for s in log.steps))
+    assert out[0.1][0] == pytest.approx(out[0.0][0], rel=1e-8)
+    assert out[0.1][1] == out[0.0][1]
+    assert out[0.1][2] < out[0.0][2]
