@@ -30,22 +30,24 @@ def _run_cli(scenario, out, ranks=1, sets=(), cache=None, timeout=900):
                           env={**os.environ, "PILEGROUP_MESH_CACHE": str(cache)})
 
 
-def _run_symmetry(tmp, text, name, symmetry, ranks=1):
+def _run_symmetry(tmp, text, name, symmetry, *, timeout, ranks=1):
     """``pilegroup run`` of the scenario ``text`` with ``numerics.symmetry``; its folder.
 
     The scenario is written to ``tmp/group.toml``, the run to ``tmp/name``; a run that does not
-    exit 0 fails the test with its error output.
+    exit 0 within ``timeout`` seconds (every caller states it: a dead rank must not hang the
+    suite) fails the test with its error output.
     """
     f = Path(tmp) / "group.toml"
     f.write_text(text)
-    r = _run_cli(f, Path(tmp) / name, ranks, [f"numerics.symmetry='{symmetry}'"], timeout=900)
+    r = _run_cli(f, Path(tmp) / name, ranks, [f"numerics.symmetry='{symmetry}'"],
+                 timeout=timeout)
     assert r.returncode == 0, r.stderr[-3000:]
     return Path(tmp) / name
 
 
 @pytest.fixture(scope="session")
 def run_symmetry():
-    """``run_symmetry(tmp, text, name, symmetry, ranks=1)``: a run folder (see the helper)."""
+    """``run_symmetry(tmp, text, name, symmetry, timeout=S, ranks=1)``: a run folder."""
     return _run_symmetry
 
 

@@ -17,6 +17,10 @@ import pytest
 
 from pilegroup.studies.verification.lateral_cases import head_resultant
 
+#: Seconds a run (serial or `mpirun -n 2`) may take before the test fails: a rank that
+#: dies or hangs must not hang the suite.
+RUN_TIMEOUT_S = 900
+
 FX, MY, Q = 100.0, 50.0, 500.0
 
 
@@ -69,11 +73,12 @@ def group(small_pile_source):
 
 @pytest.fixture(scope="module")
 def full_run(run_symmetry, tmp_path_factory, group):
-    return run_symmetry(tmp_path_factory.mktemp("lateral_full"), group, "full", "none")
+    return run_symmetry(tmp_path_factory.mktemp("lateral_full"), group, "full", "none",
+                        timeout=RUN_TIMEOUT_S)
 
 
 def test_half_matches_full_and_heads_balance(run_symmetry, full_run, group, tmp_path):
-    half = run_symmetry(tmp_path, group, "half", "auto")
+    half = run_symmetry(tmp_path, group, "half", "auto", timeout=RUN_TIMEOUT_S)
     _compare(full_run, half)
     _balance(full_run)
     _balance(half)
@@ -85,7 +90,7 @@ def test_half_matches_full_and_heads_balance(run_symmetry, full_run, group, tmp_
 
 @pytest.mark.mpi
 def test_half_under_mpirun_matches_full(run_symmetry, full_run, group, tmp_path):
-    half = run_symmetry(tmp_path, group, "half", "auto", ranks=2)
+    half = run_symmetry(tmp_path, group, "half", "auto", ranks=2, timeout=RUN_TIMEOUT_S)
     _compare(full_run, half)
     _balance(half)
 

@@ -21,6 +21,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+#: Seconds a run (serial or `mpirun -n 2`) may take before the test fails: a rank that
+#: dies or hangs must not hang the suite.
+RUN_TIMEOUT_S = 900
+
 
 def group_text(single_pile: str) -> str:
     """The fast-tier single pile made a 3 x 3 group at 2.4 m spacing (no cap)."""
@@ -71,13 +75,16 @@ def group(small_pile_source):
 
 @pytest.fixture(scope="module")
 def full_run(run_symmetry, tmp_path_factory, group):
-    return run_symmetry(tmp_path_factory.mktemp("group_full"), group, "full", "none")
+    return run_symmetry(tmp_path_factory.mktemp("group_full"), group, "full", "none",
+                        timeout=RUN_TIMEOUT_S)
 
 
 def test_quarter_matches_full(run_symmetry, full_run, group, tmp_path):
-    _compare(full_run, run_symmetry(tmp_path, group, "quarter", "quarter"))
+    _compare(full_run, run_symmetry(tmp_path, group, "quarter", "quarter",
+                                    timeout=RUN_TIMEOUT_S))
 
 
 @pytest.mark.mpi
 def test_quarter_under_mpirun_matches_full(run_symmetry, full_run, group, tmp_path):
-    _compare(full_run, run_symmetry(tmp_path, group, "quarter", "quarter", ranks=2))
+    _compare(full_run, run_symmetry(tmp_path, group, "quarter", "quarter", ranks=2,
+                                    timeout=RUN_TIMEOUT_S))
