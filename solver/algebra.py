@@ -4,7 +4,8 @@
 turns the compiled forms into the Newton system: the Jacobian (with the fixed-stress
 preconditioning matrix and the Gauss interface's own tangent), the residual with its
 constrained rows, the lifting of prescribed values, and the linear solver with its fallback.
-It works on what the problem defines: ``F_forms``, ``J_forms``, ``_P_forms``, ``layout``,
+It works on what the problem defines: ``F_forms``, ``J_forms`` (and its parts
+``_J_kept_forms``, ``_J_each_forms``), ``_P_forms``, ``layout``,
 ``interface``, ``coef``, ``options``, ``constraints``, ``plate``, ``bodies``, ``comm``,
 ``undrained``, ``timings`` and ``active``.
 """
@@ -17,8 +18,10 @@ import numpy as np
 from dolfinx import fem
 from dolfinx.cpp.la.petsc import create_index_sets
 from dolfinx.fem import petsc as fpetsc
+from mpi4py import MPI
 from petsc4py import PETSc
 
+from pilegroup.solver.layout import Body
 from pilegroup.solver.linsolve import KSPSolver
 
 
@@ -39,7 +42,14 @@ class MonolithicAlgebra:
                 self.A, spec.splits,
                 spec.band_layers if opts.band_layers is None else opts.band_layers))
         self._matrix_key: float | None = None  # dt of the assembled matrix (linear reuse)
-        self._itf_is: list[PETSc.IS] | None = None  # index sets for the interface's matrix
+        self._itf_is: list[PETSc.IS] | None = None  # index sets of the blocks
+        # the kept part of the Jacobian (J minus J_each) and what it was built with
+        self._A_kept: PETSc.Mat | None = None
+        self._kept_key: tuple | None = None
+        # the kept part was updated cell by cell since it was built, and a step has started
+        self._kept_updated = False
+        self._step_started = False
+        self._tag_of: np.ndarray | None = None  # cell tag of each parent cell
         self._row_weights: PETSc.Vec | None = None  # inexact Newton's block weights
 
     def dirichlet_response(self, bcs: list[fem.DirichletBC], out: PETSc.Vec) -> None:
@@ -84,21 +94,49 @@ class MonolithicAlgebra:
                               if g.law is not None)
         return lin
 
+    def start_step(self) -> None:
+        """A step starts: its first assembly builds the kept part anew if it was updated.
+
+        So every step starts from the kept part a run resumed there would build (a resumed
+        run gives the uninterrupted run's numbers to the last bit, docs/checkpoint.md).
+        """
+        self._step_started = True
+
+    def forget_matrix(self) -> None:
+        """The constraints changed in a way the matrix keys do not see: assemble anew."""
+        self._matrix_key = None
+        self._kept_key = None
+
     def assemble_jacobian(self, force: bool = False) -> bool:
         """Assemble ``A`` (and the preconditioning matrix); returns whether it did.
 
-        Skipped for linear problems with an unchanged dt unless ``force``.
+        Skipped for linear problems with an unchanged dt unless ``force``. Otherwise ``A`` is
+        the kept part plus ``J_each`` and the interface's tangent assembled now. The kept
+        part (``J_kept``) is assembled whole when the constraints change and at a step's
+        start after cell updates, and otherwise updated over the cells whose tangent changed
+        (docs/solver.md, "Jacobian assembly").
         """
         key = float(self.coef.dt.value)
         if not force and self._linear() and self._matrix_key == key:
             return False
         t0 = time.perf_counter()
         bcs = self.active(self.constraints.bcs)
-        self.A.zeroEntries()
-        fpetsc.assemble_matrix(self.A, self.J_forms, bcs=bcs, diag=1.0)
+        stale = force or tuple(id(bc) for bc in bcs) != self._kept_key \
+            or (self._step_started and self._kept_updated)
+        self._step_started = False
+        changed = any(b.qp.tangent_changed for b in self.bodies)
+        todo = self.comm.allreduce(int(stale) | 2 * int(changed), op=MPI.BOR)
+        if todo & 1:
+            self._assemble_kept(bcs)
+            self._kept_key = tuple(id(bc) for bc in bcs)
+        elif todo & 2:
+            self._update_kept(bcs)
+        self._A_kept.copy(self.A, structure=PETSc.Mat.Structure.SAME_NONZERO_PATTERN)
+        fpetsc.assemble_matrix(self.A, self._J_each_forms, bcs=bcs, diag=1.0)
         self.A.assemble()
-        if self.interface is not None and self.interface.has_matrix:
+        if self.interface is not None:
             self._add_interface_matrix(bcs)
+            self.A.assemble()
         if self._Mbeta is not None and self.linear_solver.uses_preconditioning_matrix:
             self._assemble_fixed_stress(bcs)
         self.linear_solver.set_operators(self.A, self.P)
@@ -107,6 +145,70 @@ class MonolithicAlgebra:
             self.plate.db = None
         self.timings["assemble_J"] += time.perf_counter() - t0
         return True
+
+    def _assemble_kept(self, bcs: list[fem.DirichletBC]) -> None:
+        """``A_kept``: ``J_kept`` now, with a unit diagonal at the constrained dofs."""
+        if self._A_kept is None:  # the whole J first, which gives A its whole sparsity
+            self.A.zeroEntries()
+            fpetsc.assemble_matrix(self.A, self.J_forms, bcs=bcs, diag=1.0)
+            self.A.assemble()
+            self._A_kept = self.A.duplicate()
+        self._A_kept.zeroEntries()
+        fpetsc.assemble_matrix(self._A_kept, self._J_kept_forms, bcs=bcs, diag=1.0)
+        self._A_kept.assemble()
+        self._kept_updated = False
+        for b in self.bodies:
+            b.qp.mark_tangent()
+
+    def _update_kept(self, bcs: list[fem.DirichletBC]) -> None:
+        """Add to ``A_kept`` the tangent's change since it was built, over the changed cells.
+
+        The tangent Function holds the change there while its term is integrated over those
+        cells only (collective: every rank assembles, with or without cells).
+        """
+        for b, compiled in zip(self.bodies, self._tangent_forms, strict=True):
+            cells, dofs, delta = b.qp.tangent_changes()
+            t = b.qp.tangent.x.array.reshape(-1, 36)
+            now = t[dofs]
+            t[dofs] = delta
+            try:
+                i = self.layout.block_of(b)
+                n = len(self.spaces)
+                forms = [[self._empty_forms[r] if r == c else None for c in range(n)]
+                         for r in range(n)]
+                forms[i][i] = self._on_cells(b, compiled, cells)
+                fpetsc.assemble_matrix(self._A_kept, forms, bcs=bcs, diag=1.0)
+                self._A_kept.assemble()
+            finally:
+                t[dofs] = now
+            b.qp.mark_tangent()
+        self._kept_updated = True
+
+    def _on_cells(self, b: Body, compiled: fem.CompiledForm, cells: np.ndarray) -> fem.Form:
+        """The compiled cell form of body ``b`` over its (body mesh) ``cells`` only."""
+        parent = cells if b.emap is None else \
+            b.emap.sub_topology_to_topology(cells, inverse=False)
+        parent = np.sort(parent).astype(np.int32)
+        ufcx = compiled.ufcx_form
+        k = fem.IntegralType.cell.value
+        ids = [ufcx.form_integral_ids[j] for j in range(ufcx.form_integral_offsets[k],
+                                                           ufcx.form_integral_offsets[k + 1])]
+        if self._tag_of is None:
+            tags, imap = self.layout.md.cell_tags, self.layout.mesh.topology.index_map(3)
+            self._tag_of = np.full(imap.size_local + imap.num_ghosts, -1)
+            self._tag_of[tags.indices] = tags.values
+        domains = [(i, parent if i == -1 else parent[self._tag_of[parent] == i]) for i in ids]
+        form = compiled.ufl_form
+        return fem.create_form(compiled, [b.V, b.V], self.layout.mesh,
+                               {fem.IntegralType.cell: domains},
+                               {c: c for c in form.coefficients()},
+                               {c: c for c in form.constants()}, self.layout.emaps)
+
+    def _block_index_sets(self) -> list[PETSc.IS]:
+        if self._itf_is is None:
+            self._itf_is = create_index_sets(
+                [(V.dofmap.index_map, V.dofmap.index_map_bs) for V in self.spaces])
+        return self._itf_is
 
     def _assemble_fixed_stress(self, bcs: list[fem.DirichletBC]) -> None:
         """``P = J + M_beta`` (one axpy on J's sparsity)."""
@@ -120,10 +222,8 @@ class MonolithicAlgebra:
         self.P.axpy(1.0, self._Mbeta, structure=PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
 
     def _add_interface_matrix(self, bcs: list[fem.DirichletBC]) -> None:
-        """Add the interface's own (non-form) tangent to ``A`` (Gauss-point quadrature)."""
-        if self._itf_is is None:
-            self._itf_is = create_index_sets(
-                [(V.dofmap.index_map, V.dofmap.index_map_bs) for V in self.spaces])
+        """Add the interface's tangent to ``A``: nodal, or the Gauss points' own matrix."""
+        iss = self._block_index_sets()
         lay = self.layout
         i_s, i_t = lay.block_of(lay.body("soil")), lay.block_of(lay.body("structure"))
         by_block = fem.bcs_by_block(self.spaces, bcs)
@@ -132,8 +232,10 @@ class MonolithicAlgebra:
             return np.concatenate([bc.dof_indices()[0] for bc in by_block[i]]
                                   + [np.zeros(0, np.int32)])
 
-        self.interface.add_jacobian(self.A, self._itf_is[i_s], self._itf_is[i_t],
-                                    constrained(i_s), constrained(i_t))
+        args = (self.A, iss[i_s], iss[i_t], constrained(i_s), constrained(i_t))
+        self.interface.add_nodal_tangent(*args)
+        if self.interface.has_matrix:
+            self.interface.add_jacobian(*args)
 
     def fall_back_linear_solver(self, reason: str) -> bool:
         """After a step failed in the linear solver: use the preset's fallback, if it has one."""

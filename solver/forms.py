@@ -41,27 +41,54 @@ from pilegroup.solver.interface import NodalInterface
 from pilegroup.solver.layout import BlockLayout, Body, eps_mandel
 
 Form = ufl.Form | None
+#: A cell tag no cell carries (the measure of the empty padding terms, ``pad_parts``).
+EMPTY_TAG = 2**31 - 2
 
 
 @dataclass
 class BlockForms:
-    """Residual blocks ``F[i]`` and Jacobian blocks ``J[i][j]`` (UFL forms, summed by term)."""
+    """Residual blocks ``F[i]`` and Jacobian blocks ``J[i][j]`` (UFL forms, summed by term).
+
+    ``J`` splits into three parts (each term is in ``J`` and in one part): ``J_each``, the
+    time step's flow term, and ``J_itf``, the interface's tangent, change from one Newton
+    iteration to the next; ``J_kept``, the rest, changes only with the quadrature-point
+    tangents, the constraints and the cell coefficients, so its matrix is kept between
+    assemblies (:meth:`~pilegroup.solver.algebra.MonolithicAlgebra.assemble_jacobian`).
+    """
 
     n: int
     F: list[Form] = field(init=False)
     J: list[list[Form]] = field(init=False)
+    J_kept: list[list[Form]] = field(init=False)
+    J_each: list[list[Form]] = field(init=False)
+    J_itf: list[list[Form]] = field(init=False)
 
     def __post_init__(self) -> None:
         self.F = [None] * self.n
-        self.J = [[None] * self.n for _ in range(self.n)]
+        self.J, self.J_kept, self.J_each, self.J_itf = (
+            [[None] * self.n for _ in range(self.n)] for _ in range(4))
 
     def add_F(self, i: int, form: ufl.Form) -> None:
         """Add ``form`` to residual block ``i``."""
         self.F[i] = form if self.F[i] is None else self.F[i] + form
 
-    def add_J(self, i: int, j: int, form: ufl.Form) -> None:
-        """Add ``form`` to Jacobian block ``(i, j)``."""
-        self.J[i][j] = form if self.J[i][j] is None else self.J[i][j] + form
+    def pad_diagonal(self, empty: Sequence[ufl.Form]) -> None:
+        """Add ``empty[i]`` (a term over no cell) to the diagonal blocks of ``J_kept``, ``J_each``.
+
+        Each part then assembles as a blocked form (a form in every row and on the diagonal).
+        """
+        for J in (self.J_kept, self.J_each):
+            for i, form in enumerate(empty):
+                J[i][i] = form if J[i][i] is None else J[i][i] + form
+
+    def add_J(self, i: int, j: int, form: ufl.Form, part: str = "kept") -> None:
+        """Add ``form`` to Jacobian block ``(i, j)`` and to its ``part`` of ``J``.
+
+        ``part``: ``"kept"``, ``"each"`` or ``"itf"`` (the class docstring).
+        """
+        parts = {"kept": self.J_kept, "each": self.J_each, "itf": self.J_itf}
+        for J in (self.J, parts[part]):
+            J[i][j] = form if J[i][j] is None else J[i][j] + form
 
 
 def projection_tau(K: float, G: float) -> float:
@@ -145,16 +172,38 @@ class FormBuilder:
         v = self.tests[self.layout.bodies.index(b)]
         return ufl.inner(b.qp.stress, eps_mandel(v)) * self.dx_body(b)
 
+    def pad_parts(self) -> list[ufl.Form]:
+        """Diagonal terms over no cell for the parts of ``J`` (:meth:`BlockForms.pad_diagonal`).
+
+        The measure is the parent's cells with a tag no cell has: nothing is integrated, but
+        DOLFINx's blocked assembly then finds a form in every row (and on the diagonal of
+        each block with boundary conditions). Returns the diagonal's empty terms.
+        """
+        lay = self.layout
+        none = ufl.Measure("dx", domain=lay.mesh, subdomain_data=lay.md.cell_tags,
+                           subdomain_id=EMPTY_TAG)
+        empty: list[ufl.Form] = [None] * self.forms.n
+        for b, v, du in zip(lay.bodies, self.tests, self.trials, strict=True):
+            empty[lay.block_of(b)] = ufl.inner(du, v) * none
+        empty[1] = self.dp * self.q * none
+        self.forms.pad_diagonal(empty)
+        return empty
+
+    def tangent(self, b: Body) -> ufl.Form:
+        """``int (C_t : eps(du)) : eps(v)`` of body ``b`` (its tangent stiffness)."""
+        i = self.layout.bodies.index(b)
+        return ufl.inner(ufl.dot(b.qp.tangent, eps_mandel(self.trials[i])),
+                         eps_mandel(self.tests[i])) * self.dx_body(b)
+
     def momentum(self, self_weight: bool) -> None:
         """Effective stress, buoyant weight and the pore-pressure coupling ``-p div v``."""
         lay, f = self.layout, self.forms
-        for b, v, du in zip(lay.bodies, self.tests, self.trials, strict=True):
+        for b, v in zip(lay.bodies, self.tests, strict=True):
             i = lay.block_of(b)
             f.add_F(i, self.internal_force(b))
             if self_weight:
                 f.add_F(i, self.coef.gam * v[2] * self.dx_body(b))
-            f.add_J(i, i, ufl.inner(ufl.dot(b.qp.tangent, eps_mandel(du)), eps_mandel(v))
-                    * self.dx_body(b))
+            f.add_J(i, i, self.tangent(b))
         v0, du0 = self.tests[0], self.trials[0]
         f.add_F(0, -lay.p * ufl.div(v0) * self.dx)
         f.add_J(0, 1, -self.dp * ufl.div(v0) * self.dx)
@@ -190,7 +239,8 @@ class FormBuilder:
         dx = self.dx
         self.forms.add_F(1, (c.S * (p - p_n) + ufl.div(u - u_n)) * q * dx
                          + c.dt * self._darcy(p, q) * dx)
-        self.forms.add_J(1, 1, c.S * dp * q * dx + c.dt * self._darcy(dp, q) * dx)
+        self.forms.add_J(1, 1, c.S * dp * q * dx + c.dt * self._darcy(dp, q) * dx,
+                         part="each")
 
     def _darcy(self, p: ufl.core.expr.Expr, q: ufl.core.expr.Expr) -> ufl.core.expr.Expr:
         """``mob grad p . grad q``; with anisotropic layers ``mob_h`` acts in x and y."""
@@ -234,10 +284,10 @@ class FormBuilder:
         f.add_F(i_t, r_t + p * ufl.inner(n, v_t("+")) * dS)
         f.add_F(i_s, r_s - p * ufl.inner(n, v_s("-")) * dS)
         Ji = itf.jacobian_forms(du_t, du_s, v_t, v_s)
-        f.add_J(i_t, i_t, Ji[0][0])
-        f.add_J(i_t, i_s, Ji[0][1])
-        f.add_J(i_s, i_t, Ji[1][0])
-        f.add_J(i_s, i_s, Ji[1][1])
+        f.add_J(i_t, i_t, Ji[0][0], part="itf")
+        f.add_J(i_t, i_s, Ji[0][1], part="itf")
+        f.add_J(i_s, i_t, Ji[1][0], part="itf")
+        f.add_J(i_s, i_s, Ji[1][1], part="itf")
         f.add_J(i_s, 1, -self.dp("-") * ufl.inner(n, v_s("-")) * dS)
         f.add_J(i_t, 1, self.dp("-") * ufl.inner(n, v_t("+")) * dS)
 

@@ -42,11 +42,13 @@ import numpy as np
 import ufl
 from dolfinx import fem, la
 from dolfinx import mesh as dmesh
+from petsc4py import PETSc
 
 from pilegroup.constitutive.base import ConstitutiveLaw
 from pilegroup.geometry import groups
 from pilegroup.geometry.meshdata import MeshData
 from pilegroup.solver.interface_groups import GaussGroup, InterfacePoints, NodalGroup
+from pilegroup.solver.interface_tangent import NodePairs, add_node_blocks, coincident_nodes
 from pilegroup.solver.layout import BodySplit
 from pilegroup.solver.qpstate import guarded_update
 
@@ -167,6 +169,8 @@ class NodalInterface:
         self._u_struct: fem.Function | None = None
         self._jump_form: fem.Form | None = None
         self.last_error = ""  # message of the last law failure on this rank
+        self.degree = degree
+        self._pairs: NodePairs | None = None
 
     # ---------- setup helpers ----------
     def _build_groups(self, md: MeshData, ents: list, traction0: Callable,
@@ -274,6 +278,24 @@ class NodalInterface:
         bp, bs = v_struct("+"), v_soil("-")
         return [[ufl.inner(D * ap, bp) * dS, -ufl.inner(D * as_, bp) * dS],
                 [-ufl.inner(D * ap, bs) * dS, ufl.inner(D * as_, bs) * dS]]
+
+    def add_nodal_tangent(self, A: PETSc.Mat, is_soil: PETSc.IS, is_struct: PETSc.IS,
+                          bc_soil: np.ndarray, bc_struct: np.ndarray) -> None:
+        """Add the matrix of :meth:`jacobian_forms` to ``A`` node by node (unassembled).
+
+        With the GLL rule the forms couple each soil node only with the structure node at the
+        same place (:func:`~pilegroup.solver.interface_tangent.add_node_blocks`), at a small
+        part of the cost of integrating the interior-facet forms. Arguments as
+        :meth:`GaussInterface.add_jacobian`, whose tangent lives in its own matrix (``D``
+        zero): nothing is added then.
+        """
+        if self.has_matrix:
+            return
+        if self._pairs is None:
+            self._pairs = coincident_nodes(self.V_soil, self.V_struct, self.degree,
+                                           self.surface_measure(), self.entity_maps)
+        add_node_blocks(A, (is_soil, is_struct), self._pairs, self.D.x.array.reshape(-1, 3, 3),
+                        (bc_soil, bc_struct))
 
     # ---------- state ----------
     def compute_jump(self, u_struct: fem.Function, u_soil: fem.Function) -> np.ndarray:

@@ -157,6 +157,7 @@ class BiotProblem(MonolithicAlgebra):
             fb.stabilisation()
         if self.interface is not None:
             fb.interface(self.interface)
+        empty = fb.pad_parts()
         em = self.layout.emaps
         jo = dict(self.options.jit_options) if self.options.jit_options is not None else None
 
@@ -165,6 +166,12 @@ class BiotProblem(MonolithicAlgebra):
 
         self.F_forms = compile_(fb.forms.F)
         self.J_forms = compile_(fb.forms.J)
+        self._J_kept_forms = compile_(fb.forms.J_kept)
+        self._J_each_forms = compile_(fb.forms.J_each)
+        # each body's tangent term, to be integrated over the cells whose tangent changed
+        self._tangent_forms = [fem.compile_form(self.comm, fb.tangent(b), jit_options=jo)
+                               for b in self.bodies]
+        self._empty_forms = [compile_(e) for e in empty]
         self._F_u_forms = [compile_(fb.forms.F[self.layout.block_of(b)]) for b in self.bodies]
         self._Fint_forms = [compile_(fb.internal_force(b)) for b in self.bodies]
         self._P_forms = compile_(fb.fixed_stress()) \
@@ -311,6 +318,7 @@ class BiotProblem(MonolithicAlgebra):
     def set_step(self, dt: float, load_factor: float) -> None:
         """Step size, loads and prescribed values (put into the fields); fields -> ``x``."""
         self.coef.dt.value = dt
+        self.start_step()
         self.load_factor = load_factor
         self.undrained = dt == 0.0
         for ld, c in self._load_consts:
@@ -407,7 +415,7 @@ class BiotProblem(MonolithicAlgebra):
             raise SolverInputError("install_structure: the structure is installed already (or"
                                    " was not built with install_later)")
         self.constraints.installed = True
-        self._matrix_key = None  # the held structure's conditions are gone: a new matrix
+        self.forget_matrix()  # the held structure's conditions are gone: a new matrix
         self.initial.install(self.bodies, restored)
         if restored:
             self.interface.active = True  # type: ignore[union-attr]

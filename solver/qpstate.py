@@ -85,6 +85,10 @@ class QuadratureState:
             self.groups.append(MaterialPoints(name, mat, cells, dofs, x))
         self.linear = all(_is_linear(g.material.law) for g in self.groups)
         self.last_error = ""
+        # the cells whose tangent changed since mark_tangent() and their tangent then
+        n_cells = mesh.topology.index_map(mesh.topology.dim).size_local
+        self._changed = np.zeros(n_cells, dtype=bool)
+        self._saved: list[tuple[np.ndarray, np.ndarray]] = []
 
     def initialise(self, stress0: dict[str, np.ndarray | None]) -> None:
         """Set the committed state of each group from ``stress0[name]`` ((n,6) kPa or None)."""
@@ -127,7 +131,41 @@ class QuadratureState:
         s[g.dofs] = stress
         if tangent is not None:
             t = self.tangent.x.array.reshape(-1, 36)
-            t[g.dofs] = np.asarray(tangent).reshape(-1, 36)
+            new = np.asarray(tangent).reshape(-1, 36)
+            old = t[g.dofs]
+            cell_diff = np.any(old != new, axis=1).reshape(-1, self.nqp).any(axis=1)
+            if not cell_diff.any():
+                return
+            first = cell_diff & ~self._changed[g.cells]
+            if first.any():  # keep the tangent these cells had at the mark
+                pts = np.repeat(first, self.nqp)
+                self._saved.append((g.dofs[pts], old[pts]))
+                self._changed[g.cells[first]] = True
+            pts = np.repeat(cell_diff, self.nqp)
+            t[g.dofs[pts]] = new[pts]
+
+    @property
+    def tangent_changed(self) -> bool:
+        """Whether a tangent changed on this rank since :meth:`mark_tangent`."""
+        return bool(self._saved)
+
+    def mark_tangent(self) -> None:
+        """Start tracking tangent changes from the current tangent."""
+        self._changed[:] = False
+        self._saved = []
+
+    def tangent_changes(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The tangent's change since :meth:`mark_tangent`: cells, their points, the change.
+
+        Owned cells whose tangent changed, the quadrature dofs of those cells and the change
+        of the tangent there (``(n_dofs, 36)``).
+        """
+        if not self._saved:
+            return np.zeros(0, np.int32), np.zeros(0, np.int32), np.zeros((0, 36))
+        dofs = np.concatenate([d for d, _ in self._saved])
+        old = np.concatenate([v for _, v in self._saved])
+        cells = np.flatnonzero(self._changed).astype(np.int32)
+        return cells, dofs, self.tangent.x.array.reshape(-1, 36)[dofs] - old
 
     def all_finite(self) -> bool:
         """True when every trial stress is finite on every rank (collective)."""

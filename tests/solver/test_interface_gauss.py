@@ -1,4 +1,6 @@
-"""Gauss-point interface quadrature (solver/interface.py GaussInterface): forces, tangent, output.
+"""Gauss-point interface quadrature (solver/interface.py GaussInterface): forces, tangent, output;
+and the Newton matrix assembled in parts (kept part, flow term, interface tangent) against the
+matrix of the whole Jacobian form, with either quadrature.
 
 A 2 x 1 x 1 m box of hexahedra: x < 1 is the "pile", x > 1 the soil in two layers (z < 0.5,
 z > 0.5); the plane x = 1 carries the shaft facet groups. The Jacobian is checked against
@@ -146,7 +148,7 @@ def test_gauss_points_weights_and_nodal_output():
                                rtol=1e-12)
 
 
-def _problem(quadrature="gauss", pair="Q1Q1", law=None):
+def _problem(quadrature="gauss", pair="Q1Q1", law=None, drained=None):
     md = box(MPI.COMM_WORLD)
     from pilegroup.constitutive.soil import LinearElastic
 
@@ -157,7 +159,7 @@ def _problem(quadrature="gauss", pair="Q1Q1", law=None):
     laws = (law, law, None, None)
     return BiotProblem(md, {"pile_1": ElasticSolid(1.0e2, 0.2), "soil_layer_01": soil,
                             "soil_layer_02": soil}, Discretisation(pair=pair),
-                       displacement_bcs=bcs, pressure_bcs=[PressureBC(None)],
+                       displacement_bcs=bcs, pressure_bcs=[PressureBC(drained)],
                        interface=InterfaceCoupling(laws, _traction0, quadrature=quadrature),
                        self_weight=False)
 
@@ -209,6 +211,91 @@ def test_gauss_jacobian_matches_finite_differences():
     without = norm(fd - Jv.array) / norm(jv)
     print(f"FD check without the interface matrix: {without:.3e}")
     assert without > 0.5
+
+
+def _whole_matrix(pb):
+    """The Jacobian's matrix assembled from the whole form ``J`` (plus the Gauss matrix)."""
+    from dolfinx.fem import petsc as fpetsc
+
+    bcs = pb.active(pb.constraints.bcs)
+    B = pb.A.duplicate()
+    B.zeroEntries()
+    fpetsc.assemble_matrix(B, pb.J_forms, bcs=bcs, diag=1.0)
+    B.assemble()
+    if pb.interface.has_matrix:  # the Gauss tangent is not in the forms
+        A, pb.A = pb.A, B
+        try:
+            pb._add_interface_matrix(bcs)
+        finally:
+            pb.A = A
+    return B
+
+
+def _matrix_error(pb):
+    from petsc4py import PETSc
+
+    B = _whole_matrix(pb)
+    scale = B.norm(PETSc.NormType.FROBENIUS)
+    B.axpy(-1.0, pb.A)
+    return B.norm(PETSc.NormType.FROBENIUS) / scale
+
+
+@pytest.mark.parametrize("quadrature,pair", [("nodal", "Q1Q1"), ("gauss", "Q1Q1"),
+                                             ("nodal", "Q2Q1")])
+def test_jacobian_in_parts_is_the_whole_jacobian(quadrature, pair, monkeypatch):
+    """Kept part + flow term + interface tangent == the matrix of the whole form, to round-off.
+
+    The kept part is integrated again only when the constraints change or a step starts after
+    it was updated; a tangent change in some cells is added over those cells only; the
+    interface tangent of the nodal quadrature is inserted node by node (its GLL forms couple
+    coincident nodes only).
+    """
+    pb = _problem(quadrature, pair, drained="xmax")  # the soil's end face drains
+    whole = []
+    kept = type(pb)._assemble_kept
+
+    def counted(self, bcs):
+        whole.append(1)
+        kept(self, bcs)
+
+    monkeypatch.setattr(type(pb), "_assemble_kept", counted)
+    for b in pb.bodies:  # a jump of a few mm: the cubic law's tangent varies node by node
+        b.u.interpolate(lambda x: np.vstack([2e-3 * np.sin(3 * x[1] + x[2]),
+                                             1e-3 * np.cos(2 * x[2] + x[0]),
+                                             3e-3 * x[1] * x[2]]) * (1.0 + (x[0] > 1.0)))
+    pb.set_step(1.0, 1.0)
+    pb.evaluate_laws()
+    pb.assemble_jacobian()
+    assert _matrix_error(pb) < 1e-14 and len(whole) == 1
+    # a new trial state: new interface tangent, the kept part as it was
+    for b in pb.bodies:
+        b.u.x.array[:] *= 1.7
+    pb.evaluate_laws()
+    pb.assemble_jacobian()
+    assert _matrix_error(pb) < 1e-14 and len(whole) == 1
+    # the soil's tangent changes in some cells (as where a plastic law yields)
+    qp = pb.body("soil").qp
+    rng = np.random.default_rng(3 + MPI.COMM_WORLD.rank)
+    for g in qp.groups:
+        t = qp.tangent.x.array.reshape(-1, 36)[g.dofs].reshape(-1, qp.nqp, 36)
+        t[rng.random(len(g.cells)) < 0.3] *= 1.5
+        qp._write(g, qp.stress.x.array.reshape(-1, 6)[g.dofs], t.reshape(-1, 36))
+    changed = MPI.COMM_WORLD.allreduce(qp.tangent_changes()[0].size, op=MPI.SUM)
+    assert changed > 0
+    pb.assemble_jacobian()
+    assert _matrix_error(pb) < 1e-14 and len(whole) == 1
+    assert not qp.tangent_changed  # the change is in the kept part now
+    # the next step starts from the kept part built anew (what a run resumed there builds);
+    # a step with another size (flow term) and no tangent change keeps it; an undrained
+    # step (drainage conditions released) builds it anew
+    drained = len(pb.active(pb.constraints.bcs))
+    for dt, builds in ((0.25, 2), (0.5, 2), (0.0, 3)):
+        pb.set_step(dt, 1.0)
+        pb.evaluate_laws()
+        pb.assemble_jacobian()
+        assert _matrix_error(pb) < 1e-14
+        assert len(whole) == builds, dt
+    assert len(pb.active(pb.constraints.bcs)) < drained
 
 
 class FailsOnRankZero(CubicSprings):
