@@ -46,9 +46,9 @@ class MonolithicAlgebra:
         # the kept part of the Jacobian (J minus J_each) and what it was built with
         self._A_kept: PETSc.Mat | None = None
         self._kept_key: tuple | None = None
-        # the kept part was updated cell by cell since it was built, and a step has started
+        # the kept part was updated cell by cell since it was built; it is to be built whole
         self._kept_updated = False
-        self._step_started = False
+        self._rebuild_kept = False
         self._tag_of: np.ndarray | None = None  # cell tag of each parent cell
         self._row_weights: PETSc.Vec | None = None  # inexact Newton's block weights
 
@@ -94,13 +94,14 @@ class MonolithicAlgebra:
                               if g.law is not None)
         return lin
 
-    def start_step(self) -> None:
-        """A step starts: its first assembly builds the kept part anew if it was updated.
+    def rebuild_kept(self) -> None:
+        """The next assembly builds the kept part whole if it was updated cell by cell.
 
-        So every step starts from the kept part a run resumed there would build (a resumed
-        run gives the uninterrupted run's numbers to the last bit, docs/checkpoint.md).
+        Called after a checkpoint is written: the run then goes on from the kept part that a
+        run resumed from that checkpoint builds, and both give the same numbers to the last
+        bit (docs/checkpoint.md, "Exactness").
         """
-        self._step_started = True
+        self._rebuild_kept = True
 
     def forget_matrix(self) -> None:
         """The constraints changed in a way the matrix keys do not see: assemble anew."""
@@ -112,9 +113,9 @@ class MonolithicAlgebra:
 
         Skipped for linear problems with an unchanged dt unless ``force``. Otherwise ``A`` is
         the kept part plus ``J_each`` and the interface's tangent assembled now. The kept
-        part (``J_kept``) is assembled whole when the constraints change and at a step's
-        start after cell updates, and otherwise updated over the cells whose tangent changed
-        (docs/solver.md, "Jacobian assembly").
+        part (``J_kept``) is assembled whole when the constraints change (and after a
+        checkpoint, :meth:`rebuild_kept`), and otherwise updated over the cells whose tangent
+        changed (docs/solver.md, "Jacobian assembly").
         """
         key = float(self.coef.dt.value)
         if not force and self._linear() and self._matrix_key == key:
@@ -122,8 +123,8 @@ class MonolithicAlgebra:
         t0 = time.perf_counter()
         bcs = self.active(self.constraints.bcs)
         stale = force or tuple(id(bc) for bc in bcs) != self._kept_key \
-            or (self._step_started and self._kept_updated)
-        self._step_started = False
+            or (self._rebuild_kept and self._kept_updated)
+        self._rebuild_kept = False
         changed = any(b.qp.tangent_changed for b in self.bodies)
         todo = self.comm.allreduce(int(stale) | 2 * int(changed), op=MPI.BOR)
         if todo & 1:

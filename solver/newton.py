@@ -14,6 +14,9 @@ their forces through the interface, whose imbalance shows in both (as ABAQUS tak
 time-averaged force per field). Or: the increment is below ``stol`` times the solution, block
 by block. A step never accepts a non-converged state.
 
+A step whose iterations alternate between two states above the tolerance (:func:`cycling`) is
+given up before the iteration limit: the stepper cuts it as any failed step.
+
 Inexact Newton: each correction's linear solve may stop once every block's linear residual is
 below ``krylov_forcing`` times that block's tolerance (``NewtonOptions.krylov_forcing``).
 """
@@ -28,6 +31,23 @@ from petsc4py import PETSc
 from pilegroup.errors import ConvergenceError, LinearSolveError
 from pilegroup.solver.inputs import NewtonOptions
 from pilegroup.solver.step_protocol import StepInfo, StepProblem
+
+
+def cycling(ratios: list[float], close: float = 0.05, apart: float = 1.2) -> bool:
+    """Whether Newton alternates between two states above the tolerance (a 2-cycle).
+
+    ``ratios``: the largest residual over its tolerance at each iteration so far. A cycle:
+    each of the last two values within ``close`` (relative) of the value two iterations before,
+    the two at least ``apart`` times each other, both above 1. Newton is deterministic, so it
+    goes on alternating (a point of a law with a kink in its tangent flips between two
+    branches) until the iteration limit; the step is better cut at once. A monotone slow
+    decrease is not a cycle.
+    """
+    if len(ratios) < 5:
+        return False
+    a, b, c, d = ratios[-4:]
+    return (abs(d - b) <= close * b and abs(c - a) <= close * a
+            and max(c, d) >= apart * min(c, d) and min(c, d) > 1.0)
 
 
 class NewtonSolver:
@@ -48,13 +68,20 @@ class NewtonSolver:
         try:
             rn, gap = pb.residual_state(load_factor)
             ref = self._reference(rn, load_factor)
+            ratios: list[float] = []  # largest residual / tolerance over the blocks
             for it in range(nw.max_it + 1):
                 info.residuals.append(tuple(float(r) for r in rn))
+                ratios.append(float(np.max(rn / (nw.rtol * ref + nw.atol))))
                 if it >= 1 and (self._small(rn, gap, ref, load_factor) or ok_inc):
                     info.converged = True
                     break
                 if it == nw.max_it:
                     info.message = f"no convergence in {nw.max_it} iterations; |r| = {rn}"
+                    break
+                if cycling(ratios):
+                    info.message = (f"Newton cycles between two states after {it} iterations "
+                                    f"(residual {ratios[-2]:.3g} and {ratios[-1]:.3g} times "
+                                    "the tolerance, in turn)")
                     break
                 pb.assemble_jacobian()
                 its = pb.solve_linear(pb.b, pb.dx, self._linear_tolerance(ref))

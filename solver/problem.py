@@ -318,7 +318,6 @@ class BiotProblem(MonolithicAlgebra):
     def set_step(self, dt: float, load_factor: float) -> None:
         """Step size, loads and prescribed values (put into the fields); fields -> ``x``."""
         self.coef.dt.value = dt
-        self.start_step()
         self.load_factor = load_factor
         self.undrained = dt == 0.0
         for ld, c in self._load_consts:

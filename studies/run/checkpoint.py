@@ -288,6 +288,7 @@ class Checkpoints:
             if old.name != name:
                 old.unlink(missing_ok=True)
         self.generation, self.last = gen, time.perf_counter()
+        self.pb.rebuild_kept()  # go on as a run resumed from here would
         seconds = comm.allreduce(self.last - t0, op=MPI.MAX)
         self.written.append({"t_day": state.t, "reason": reason, "bytes": total,
                              "seconds": seconds})

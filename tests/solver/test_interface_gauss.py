@@ -245,8 +245,8 @@ def _matrix_error(pb):
 def test_jacobian_in_parts_is_the_whole_jacobian(quadrature, pair, monkeypatch):
     """Kept part + flow term + interface tangent == the matrix of the whole form, to round-off.
 
-    The kept part is integrated again only when the constraints change or a step starts after
-    it was updated; a tangent change in some cells is added over those cells only; the
+    The kept part is integrated again only when the constraints change or after a checkpoint
+    once it was updated; a tangent change in some cells is added over those cells only; the
     interface tangent of the nodal quadrature is inserted node by node (its GLL forms couple
     coincident nodes only).
     """
@@ -285,12 +285,13 @@ def test_jacobian_in_parts_is_the_whole_jacobian(quadrature, pair, monkeypatch):
     pb.assemble_jacobian()
     assert _matrix_error(pb) < 1e-14 and len(whole) == 1
     assert not qp.tangent_changed  # the change is in the kept part now
-    # the next step starts from the kept part built anew (what a run resumed there builds);
-    # a step with another size (flow term) and no tangent change keeps it; an undrained
-    # step (drainage conditions released) builds it anew
+    # a step with another size (flow term) keeps it; after a checkpoint (rebuild_kept) it is
+    # built anew, being updated; an undrained step (drainage conditions released) builds it
     drained = len(pb.active(pb.constraints.bcs))
-    for dt, builds in ((0.25, 2), (0.5, 2), (0.0, 3)):
+    for dt, rebuild, builds in ((0.25, False, 1), (0.5, True, 2), (0.5, True, 2), (0.0, False, 3)):
         pb.set_step(dt, 1.0)
+        if rebuild:
+            pb.rebuild_kept()
         pb.evaluate_laws()
         pb.assemble_jacobian()
         assert _matrix_error(pb) < 1e-14
