@@ -42,8 +42,8 @@ class MonolithicAlgebra:
                 self.A, spec.splits,
                 spec.band_layers if opts.band_layers is None else opts.band_layers))
         self._matrix_key: float | None = None  # dt of the assembled matrix (linear reuse)
-        self._itf_is: list[PETSc.IS] | None = None  # index sets of the blocks
-        # the kept part of the Jacobian (J minus J_each) and what it was built with
+        self._block_is: list[PETSc.IS] | None = None  # index sets of the blocks
+        # the kept part of the Jacobian (J_kept) and the constraints it was built with
         self._A_kept: PETSc.Mat | None = None
         self._kept_key: tuple | None = None
         # the kept part was updated cell by cell since it was built; it is to be built whole
@@ -122,14 +122,14 @@ class MonolithicAlgebra:
             return False
         t0 = time.perf_counter()
         bcs = self.active(self.constraints.bcs)
-        stale = force or tuple(id(bc) for bc in bcs) != self._kept_key \
-            or (self._rebuild_kept and self._kept_updated)
+        bc_key = tuple(id(bc) for bc in bcs)
+        stale = force or bc_key != self._kept_key or (self._rebuild_kept and self._kept_updated)
         self._rebuild_kept = False
         changed = any(b.qp.tangent_changed for b in self.bodies)
         todo = self.comm.allreduce(int(stale) | 2 * int(changed), op=MPI.BOR)
         if todo & 1:
             self._assemble_kept(bcs)
-            self._kept_key = tuple(id(bc) for bc in bcs)
+            self._kept_key = bc_key
         elif todo & 2:
             self._update_kept(bcs)
         self._A_kept.copy(self.A, structure=PETSc.Mat.Structure.SAME_NONZERO_PATTERN)
@@ -164,24 +164,27 @@ class MonolithicAlgebra:
     def _update_kept(self, bcs: list[fem.DirichletBC]) -> None:
         """Add to ``A_kept`` the tangent's change since it was built, over the changed cells.
 
-        The tangent Function holds the change there while its term is integrated over those
-        cells only (collective: every rank assembles, with or without cells).
+        Each body's tangent Function holds the change there while its term is integrated over
+        those cells only, all bodies in one assembly (collective: every rank assembles, with
+        or without cells).
         """
-        for b, compiled in zip(self.bodies, self._tangent_forms, strict=True):
-            cells, dofs, delta = b.qp.tangent_changes()
-            t = b.qp.tangent.x.array.reshape(-1, 36)
-            now = t[dofs]
-            t[dofs] = delta
-            try:
+        n = len(self.spaces)
+        forms = [[self._empty_forms[r] if r == c else None for c in range(n)] for r in range(n)]
+        restore = []
+        try:
+            for b, compiled in zip(self.bodies, self._tangent_forms, strict=True):
+                cells, dofs, delta = b.qp.tangent_changes()
+                t = b.qp.tangent.x.array.reshape(-1, 36)
+                restore.append((t, dofs, t[dofs]))
+                t[dofs] = delta
                 i = self.layout.block_of(b)
-                n = len(self.spaces)
-                forms = [[self._empty_forms[r] if r == c else None for c in range(n)]
-                         for r in range(n)]
                 forms[i][i] = self._on_cells(b, compiled, cells)
-                fpetsc.assemble_matrix(self._A_kept, forms, bcs=bcs, diag=1.0)
-                self._A_kept.assemble()
-            finally:
+            fpetsc.assemble_matrix(self._A_kept, forms, bcs=bcs, diag=1.0)
+            self._A_kept.assemble()
+        finally:
+            for t, dofs, now in restore:
                 t[dofs] = now
+        for b in self.bodies:
             b.qp.mark_tangent()
         self._kept_updated = True
 
@@ -206,10 +209,10 @@ class MonolithicAlgebra:
                                {c: c for c in form.constants()}, self.layout.emaps)
 
     def _block_index_sets(self) -> list[PETSc.IS]:
-        if self._itf_is is None:
-            self._itf_is = create_index_sets(
+        if self._block_is is None:
+            self._block_is = create_index_sets(
                 [(V.dofmap.index_map, V.dofmap.index_map_bs) for V in self.spaces])
-        return self._itf_is
+        return self._block_is
 
     def _assemble_fixed_stress(self, bcs: list[fem.DirichletBC]) -> None:
         """``P = J + M_beta`` (one axpy on J's sparsity)."""

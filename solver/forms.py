@@ -49,9 +49,9 @@ EMPTY_TAG = 2**31 - 2
 class BlockForms:
     """Residual blocks ``F[i]`` and Jacobian blocks ``J[i][j]`` (UFL forms, summed by term).
 
-    ``J`` splits into three parts (each term is in ``J`` and in one part): ``J_each``, the
-    time step's flow term, and ``J_itf``, the interface's tangent, change from one Newton
-    iteration to the next; ``J_kept``, the rest, changes only with the quadrature-point
+    Each term of ``J`` is also in one part: ``J_each``, the time step's flow term, changes from
+    one Newton iteration to the next; ``J_kept``, the rest but the interface's tangent (which
+    the interface adds node by node, ``part="itf"``), changes only with the quadrature-point
     tangents, the constraints and the cell coefficients, so its matrix is kept between
     assemblies (:meth:`~pilegroup.solver.algebra.MonolithicAlgebra.assemble_jacobian`).
     """
@@ -61,12 +61,11 @@ class BlockForms:
     J: list[list[Form]] = field(init=False)
     J_kept: list[list[Form]] = field(init=False)
     J_each: list[list[Form]] = field(init=False)
-    J_itf: list[list[Form]] = field(init=False)
 
     def __post_init__(self) -> None:
         self.F = [None] * self.n
-        self.J, self.J_kept, self.J_each, self.J_itf = (
-            [[None] * self.n for _ in range(self.n)] for _ in range(4))
+        self.J, self.J_kept, self.J_each = (
+            [[None] * self.n for _ in range(self.n)] for _ in range(3))
 
     def add_F(self, i: int, form: ufl.Form) -> None:
         """Add ``form`` to residual block ``i``."""
@@ -84,10 +83,10 @@ class BlockForms:
     def add_J(self, i: int, j: int, form: ufl.Form, part: str = "kept") -> None:
         """Add ``form`` to Jacobian block ``(i, j)`` and to its ``part`` of ``J``.
 
-        ``part``: ``"kept"``, ``"each"`` or ``"itf"`` (the class docstring).
+        ``part``: ``"kept"``, ``"each"`` or ``"itf"`` (in ``J`` only; the class docstring).
         """
-        parts = {"kept": self.J_kept, "each": self.J_each, "itf": self.J_itf}
-        for J in (self.J, parts[part]):
+        parts = {"kept": [self.J_kept], "each": [self.J_each], "itf": []}
+        for J in [self.J, *parts[part]]:
             J[i][j] = form if J[i][j] is None else J[i][j] + form
 
 

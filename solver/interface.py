@@ -292,8 +292,10 @@ class NodalInterface:
         if self.has_matrix:
             return
         if self._pairs is None:
-            self._pairs = coincident_nodes(self.V_soil, self.V_struct, self.degree,
-                                           self.surface_measure(), self.entity_maps)
+            Vs = fem.functionspace(self.split.soil, ("Lagrange", self.degree))
+            self._check_same_nodes(Vs, self.V_soil)
+            self._pairs = coincident_nodes(Vs, self.V_struct, self.surface_measure(),
+                                           self.entity_maps)
         add_node_blocks(A, (is_soil, is_struct), self._pairs, self.D.x.array.reshape(-1, 3, 3),
                         (bc_soil, bc_struct))
 

@@ -33,18 +33,16 @@ class NodePairs(NamedTuple):
     area: np.ndarray
 
 
-def coincident_nodes(V_soil: fem.FunctionSpace, V_struct: fem.FunctionSpace, degree: int,
-                     dS: ufl.Measure, entity_maps: list) -> NodePairs:
+def coincident_nodes(Vs: fem.FunctionSpace, V_struct: fem.FunctionSpace, dS: ufl.Measure,
+                     entity_maps: list) -> NodePairs:
     """The node pairs of the interface measure ``dS`` (soil on its ``"-"`` side).
 
-    The area is assembled without summing over ranks: each rank inserts its own facets' part,
-    as the assembly of the forms does. Raises ``RuntimeError`` if a soil node has no structure
-    node at its place (the mesh must be conforming across the interface).
+    ``Vs``: a scalar space with the soil displacement's nodes. The area is assembled without
+    summing over ranks: each rank inserts its own facets' part, as the assembly of the forms
+    does. Raises ``RuntimeError`` if a soil node has no structure node at its place (the mesh
+    must be conforming across the interface).
     """
-    Vs = fem.functionspace(V_soil.mesh, ("Lagrange", degree))
-    xs_all = V_soil.tabulate_dof_coordinates()
-    if not np.array_equal(Vs.tabulate_dof_coordinates(), xs_all):
-        raise RuntimeError("scalar and vector spaces of one element do not share their nodes")
+    xs_all = Vs.tabulate_dof_coordinates()
     psi = ufl.TestFunction(Vs)
     area = fem.assemble_vector(fem.form(psi("-") * dS, entity_maps=entity_maps)).array.copy()
     s = np.flatnonzero(area > 0.0).astype(np.int32)
