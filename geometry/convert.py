@@ -60,7 +60,7 @@ def _cache_key(spec: GeometrySpec) -> str:
 
 
 def _restore_python_signal_handlers() -> None:
-    """Re-arm Python's SIGTERM/SIGINT handlers, which gmsh's library replaces at the C level.
+    """Re-arm Python's stop-signal handlers, which gmsh's library replaces at the C level.
 
     ``gmshInitialize``/``gmshFinalize`` set their own (or the default) actions; Python's
     record (``signal.getsignal``) is unchanged, so setting it again restores the handler a run
@@ -68,7 +68,7 @@ def _restore_python_signal_handlers() -> None:
     """
     if threading.current_thread() is not threading.main_thread():
         return
-    for s in (signal.SIGTERM, signal.SIGINT):
+    for s in (signal.SIGTERM, signal.SIGINT, signal.SIGUSR1):
         handler = signal.getsignal(s)
         if handler is not None:
             signal.signal(s, handler)

@@ -407,7 +407,7 @@ class Outputs:
     increasing).
 
     ``checkpoint_every_min``: a checkpoint every this many minutes of wall time as well, at
-    the next step boundary (0: only at the output times and on SIGTERM/SIGINT).
+    the next step boundary (0: only at the output times and on SIGTERM/SIGINT/SIGUSR1).
 
     ``cap_stiffness``: at the end of the run, the loaded face's 6 x 6 stiffness matrix about the
     action point (``cap_stiffness.csv``; docs/model.md, "Cap actions"): the model is then the

@@ -104,3 +104,15 @@ def rerun_under_mpirun():
     """``rerun_under_mpirun(__file__)``: the file's serial tests again on 2 ranks."""
     return _rerun_under_mpirun
 
+
+
+@pytest.fixture(scope="session")
+def mpirun_forwards_sigterm():
+    """Whether ``mpirun`` passes SIGTERM on to the ranks and waits for them.
+
+    MPICH's Hydra does; Open MPI's (PRRTE, 6.0 measured) ends the ranks at once on SIGTERM and
+    SIGINT, with no grace period, and forwards SIGUSR1 (docs/checkpoint.md, "Signals").
+    """
+    from mpi4py import MPI
+
+    return "Open MPI" not in MPI.Get_library_version()

@@ -9,8 +9,8 @@ Which class names which kind of failure:
   exits with code 1);
 * :class:`FitError`: a fit of parameters to data did not converge or left a parameter
   undetermined (the CLI exits with code 1);
-* :class:`RunInterrupted`: a run stopped on SIGTERM or SIGINT after saving a checkpoint (the
-  CLI exits with code 128 + the signal number: 143 or 130);
+* :class:`RunInterrupted`: a run stopped on SIGTERM, SIGINT or SIGUSR1 after saving a
+  checkpoint (the CLI exits with code 128 + the signal number: 143, 130 or 138);
 * :class:`FolderBusy` (a :class:`ScenarioError`): another run holds the lock of the output
   folder (exit code 2).
 

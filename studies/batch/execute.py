@@ -16,10 +16,10 @@ is skipped, every other case is run again from an emptied folder (a killed batch
 Failures: an exception in a case is recorded (``batch_case.json``, ``summary.json``) and the
 group takes the next case. A case whose folder another run holds
 (:mod:`pilegroup.studies.run.folder_lock`) is not run, its folder left alone, and counted as
-failed with a warning line naming the holder. On SIGTERM or SIGINT (``pilegroup batch`` turns
-them into stop requests, :mod:`pilegroup.studies.run.interrupt`) each running case stops at its
-next step boundary with a checkpoint and is recorded ``interrupted``, and no group takes another
-case. In a group of several ranks a failure is only
+failed with a warning line naming the holder. On SIGTERM, SIGINT or SIGUSR1 (``pilegroup
+batch`` turns them into stop requests, :mod:`pilegroup.studies.run.interrupt`) each running
+case stops at its next step boundary with a checkpoint and is recorded ``interrupted``, and no
+group takes another case. In a group of several ranks a failure is only
 survivable when every rank of the group raised (the solver makes law and convergence failures
 collective): the ranks that raised meet in a barrier on a communicator of their own and wait up
 to :data:`AGREE_TIMEOUT_S` for the rest of the group. If a rank raised alone, the others are stuck
@@ -88,7 +88,7 @@ PROGRESS_ENV = "PILEGROUP_PROGRESS"
 class BatchResult:
     """The rows of ``batch.json`` (world rank 0 only; empty elsewhere) and the failed count.
 
-    ``signum``: the stop signal (SIGTERM, SIGINT) that ended the batch early, or 0.
+    ``signum``: the stop signal (SIGTERM, SIGINT, SIGUSR1) that ended the batch early, or 0.
     """
 
     rows: list[BatchRow] = field(default_factory=list)

@@ -51,7 +51,7 @@ class BatchRow(TypedDict, total=False):
     name: str
     status: str
     """``pending``, ``running``, ``complete``, ``failed`` or ``interrupted`` (stopped by
-    SIGTERM or SIGINT with a checkpoint; run again from the start by the next batch)."""
+    SIGTERM, SIGINT or SIGUSR1 with a checkpoint; run again from the start by the next batch)."""
     skipped: bool
     """Complete before this batch started (not run again)."""
     message: str | None

@@ -3,12 +3,13 @@
 The combinations file is read and every combination's scenario validated
 (:mod:`pilegroup.studies.batch.combination_plan`) before anything runs. The combinations are the
 cases of one batch (:func:`pilegroup.studies.batch.execute.run_batch`: MPI groups, shared queue,
-failures recorded, resume, stop on SIGTERM/SIGINT), each in its run folder ``OUT/<combination>``
-with ``OUT/batch.csv`` and ``OUT/batch.json``. World rank 0 then reads the run folders and writes
-``OUT/envelope.csv``, ``OUT/combination_results.csv`` and ``OUT/envelope.md``
-(:mod:`pilegroup.studies.results.envelope`), also when some combinations failed or the batch was
-stopped: those are listed, with their status, as not in the envelope. Running the command again
-skips the combinations already complete and writes the envelope again.
+failures recorded, resume, stop on SIGTERM/SIGINT/SIGUSR1), each in its run folder
+``OUT/<combination>`` with ``OUT/batch.csv`` and ``OUT/batch.json``. World rank 0 then reads
+the run folders and writes ``OUT/envelope.csv``, ``OUT/combination_results.csv`` and
+``OUT/envelope.md`` (:mod:`pilegroup.studies.results.envelope`), also when some combinations
+failed or the batch was stopped: those are listed, with their status, as not in the envelope.
+Running the command again skips the combinations already complete and writes the envelope
+again.
 """
 
 from __future__ import annotations

@@ -2,8 +2,8 @@
 
 All run under MPI as they are (``mpirun -n N pilegroup batch PLAN --ranks-per-case k``, or
 ``srun``). Exit codes as the rest of the CLI: 0 every case complete, 1 a case failed, 2 invalid
-input, 143/130 stopped by SIGTERM/SIGINT (the running cases recorded ``interrupted``); the
-one-line message of an invalid input is printed by world rank 0 only.
+input, 143/130/138 stopped by SIGTERM/SIGINT/SIGUSR1 (the running cases recorded
+``interrupted``); the one-line message of an invalid input is printed by world rank 0 only.
 """
 
 from __future__ import annotations

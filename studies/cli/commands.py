@@ -1,8 +1,8 @@
 """The ``pilegroup`` command line.
 
 Exit codes: 0 success, 1 a run failed (e.g. no convergence), 2 invalid input (a clear one-line
-message naming the key, the value and what is allowed; no traceback), 130/143 a run stopped by
-SIGINT/SIGTERM after saving a checkpoint (128 + the signal number).
+message naming the key, the value and what is allowed; no traceback), 130/143/138 a run stopped by
+SIGINT/SIGTERM/SIGUSR1 after saving a checkpoint (128 + the signal number).
 
 Under MPI a :class:`~pilegroup.errors.PilegroupError` is raised on every rank alike (the
 scenario, the stepper's decisions and the Newton checks are collective), so rank 0 prints its
@@ -18,6 +18,7 @@ import json
 import logging
 import os
 import shlex
+import signal
 import sys
 import traceback
 from collections.abc import Sequence
@@ -143,7 +144,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
 
         sc = scenario_until(sc, args.day)
     out = Path(args.out) if args.out else Path("out") / sc.name
-    with stop_on_signals():  # SIGTERM/SIGINT: checkpoint at the next step boundary, then stop
+    with stop_on_signals():  # a stop signal: checkpoint at the next step boundary, then stop
         summary = run_scenario(sc, out, mesh_size=args.mesh_size, stop_after=args.stop_after,
                                resume=args.resume, force=args.force)
     if _world_rank() == 0:
@@ -331,7 +332,8 @@ def build_parser() -> argparse.ArgumentParser:
         "interface (DOLFINx, gmsh, PETSc). Scenarios are TOML files whose keys carry their "
         "unit; bundled scenarios: " + ", ".join(BUNDLED) + ".",
         epilog="Under MPI: mpirun -n 2 pilegroup run pier667. Exit codes: 0 ok, 1 run failed, "
-        "2 invalid input, 143/130 stopped by SIGTERM/SIGINT (checkpoint saved; --resume).",
+        "2 invalid input, 143/130/138 stopped by SIGTERM/SIGINT/SIGUSR1 (checkpoint saved; "
+        "--resume).",
     )
     p.add_argument("-v", "--verbose", action="count", default=0, help="more log output")
     sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
@@ -352,7 +354,21 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of the ``pilegroup`` console script; returns the exit code."""
+    """Entry point of the ``pilegroup`` console script; returns the exit code.
+
+    Before the process ends, SIGPIPE gets Python's action back (ignored: a write to a closed
+    pipe raises instead). PETSc installs a handler that turns it into ``MPI_Abort`` (exit 59),
+    and Open MPI's ``mpirun`` closes its connections to the ranks as soon as one rank exits
+    with a non-zero code, while the others still finalise: measured on a run stopped by
+    SIGUSR1 on two ranks, which ended with 59 instead of 138 (docs/checkpoint.md, "Signals").
+    """
+    try:
+        return _main(argv)
+    finally:
+        signal.signal(signal.SIGPIPE, signal.SIG_IGN)
+
+
+def _main(argv: Sequence[str] | None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     setup_logging(args.verbose)

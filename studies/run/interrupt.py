@@ -1,4 +1,9 @@
-"""Stop requests by SIGTERM and SIGINT, honoured by a run at its next step boundary.
+"""Stop requests by SIGTERM, SIGINT and SIGUSR1, honoured by a run at its next step boundary.
+
+SIGUSR1 is the stop request that every ``mpirun`` forwards to the ranks: Open MPI's (PRRTE)
+answers SIGTERM and SIGINT by killing the ranks at once, without a grace period, and forwards
+SIGUSR1; MPICH's Hydra forwards all three (docs/checkpoint.md, "Signals"). Batch schedulers
+send it ahead of a time limit (Slurm's ``--signal=USR1@...``).
 
 The handlers only record the signal (a Python handler runs between bytecodes of the main
 thread, so never inside a PETSc call or an MPI collective); the run reads :func:`requested`
@@ -18,7 +23,7 @@ from contextlib import contextmanager
 from types import FrameType
 
 #: The signals that ask a run to stop and save a checkpoint.
-STOP_SIGNALS = (signal.SIGTERM, signal.SIGINT)
+STOP_SIGNALS = (signal.SIGTERM, signal.SIGINT, signal.SIGUSR1)
 
 _pending: list[int] = []
 
@@ -40,7 +45,7 @@ def requested() -> int:
 
 @contextmanager
 def stop_on_signals() -> Iterator[None]:
-    """Within the block, SIGTERM and SIGINT request a stop instead of ending the process."""
+    """Within the block, the stop signals request a stop instead of ending the process."""
     _pending.clear()
     previous = {s: signal.signal(s, _handler) for s in STOP_SIGNALS}
     try:
