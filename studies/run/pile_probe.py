@@ -181,7 +181,9 @@ class PileProbe:
         ``fields``: the interface's ``nodal_fields()`` when already computed.
         """
         f = fields if fields is not None else self._itf.nodal_fields()
-        mask = (self._node_pile == i) & (self._x[:, 2] < 0.0)
+        # every node of the ground-surface ring: its z is 0 up to the mesh's round-off, whose
+        # sign differs between nodes, builds and partitions
+        mask = (self._node_pile == i) & (np.round(self._x[:, 2], 6) <= 0.0)
         shaft_w = self._itf.W[:, : self._itf.split.n_layers].sum(axis=1)
         mask &= shaft_w > 0
         z = np.round(self._x[mask, 2], 6)
