@@ -29,4 +29,8 @@ ENV SYSTEM_PACKAGES=1 \
     PATH=/opt/pilegroup/.venv/bin:/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin \
     PRTE_MCA_mapby=:oversubscribe
 RUN make bootstrap && pilegroup --help > /dev/null
+# `docker stop` sends SIGUSR1: a run stops at its next step boundary with a checkpoint, and Open
+# MPI's mpirun forwards it to the ranks (on SIGTERM it kills them at once: docs/checkpoint.md,
+# "Signals"). Give a large run the time to reach the boundary: `docker stop -t 120`.
+STOPSIGNAL SIGUSR1
 CMD ["pilegroup", "--help"]

@@ -2,11 +2,12 @@
 # The Docker image without a container engine, and its smoke tests (docs/container.md).
 #
 # Builds the image's file system in a root of Debian unstable made by debootstrap, following the
-# Dockerfile's instructions one by one (FROM, ARG, ENV, RUN, USER, WORKDIR, COPY, CMD): RUN is
-# `/bin/sh -c` through chroot as the Dockerfile's USER with its ENV and WORKDIR, COPY honours
+# Dockerfile's instructions one by one (FROM, ARG, ENV, RUN, USER, WORKDIR, COPY, CMD,
+# STOPSIGNAL): RUN is `/bin/sh -c` through chroot as the Dockerfile's USER with its ENV and WORKDIR, COPY honours
 # .dockerignore. Then, as the image's user (as `docker run` would):
 #   1. pilegroup --help;
-#   2. pilegroup run single_pile (serial) and mpirun -n 2 pilegroup run single_pile, timed;
+#   2. pilegroup run single_pile (serial) and mpirun -n 2 pilegroup run single_pile, timed; the
+#      image's STOPSIGNAL to a 2-rank run (what `docker stop` does): checkpoint, 128 + signal;
 #   3. the tests: `make test` (ruff and the fast tier, against Debian's packages) or a subset;
 #   4. the cap settlement of both runs against a serial run in the repository's .venv (if any).
 # and prints a Markdown summary (also in ROOT/smoke-result.md).
@@ -115,6 +116,7 @@ declare -A env_vars
 user=root
 workdir=/
 cmd=
+stopsignal=SIGTERM
 
 uid_of() { chroot "$1" id -u "$2"; }
 gid_of() { chroot "$1" id -g "$2"; }
@@ -185,6 +187,7 @@ follow() {
              in_root "$r" "$rest" || { echo "container-smoke: failed: RUN $rest" >&2; exit 1; }
            fi ;;
       CMD) cmd=$rest ;;
+      STOPSIGNAL) stopsignal=$rest ;;
       *) echo "container-smoke: instruction not supported: $op" >&2; exit 1 ;;
     esac
   done
@@ -217,7 +220,7 @@ else
 fi
 mount_root "$image"
 follow "$image" "$first_copy" $((${#instr[@]} - 1)) run
-log "image built: user $user, workdir $workdir, CMD $cmd"
+log "image built: user $user, workdir $workdir, CMD $cmd, STOPSIGNAL $stopsignal"
 
 # ---- 3. smoke tests as the image's user ---------------------------------------------------------
 result=$root/smoke-result.md
@@ -235,6 +238,16 @@ log "serial single_pile"
 t_serial=$(run_timed serial "rm -rf out/smoke-serial && pilegroup run single_pile --out out/smoke-serial")
 log "mpirun -n 2 single_pile"
 t_mpi=$(run_timed mpi "rm -rf out/smoke-mpi && mpirun -n 2 pilegroup run single_pile --out out/smoke-mpi")
+# What `docker stop` does to a 2-rank run: the image's STOPSIGNAL to mpirun (PID 1 in a
+# container) once a checkpoint exists; the run must stop with it, exit 128 + the signal number
+# and leave summary.json "interrupted".
+log "docker stop ($stopsignal) to mpirun -n 2 single_pile"
+sig=${stopsignal#SIG}
+t_stop=$(run_timed stop "rm -rf out/smoke-stop; mpirun -n 2 pilegroup run single_pile \
+  --out out/smoke-stop & pid=\$!; while [ ! -e out/smoke-stop/checkpoint/manifest.json ]; do \
+  kill -0 \$pid || exit 1; sleep 0.2; done; kill -s $sig \$pid; wait \$pid; rc=\$?; \
+  echo exit \$rc; [ \$rc = $((128 + $(kill -l "$sig"))) ] \
+  && grep -q '\"status\": \"interrupted\"' out/smoke-stop/summary.json")
 t_tests=-; tests_line=none
 case $tests in
   fast) log "make test"; t_tests=$(run_timed tests "make test"); tests_line="make test" ;;
@@ -291,6 +304,7 @@ umount_all
   echo "| --- | ---: |"
   echo "| \`pilegroup run single_pile\` | $t_serial |"
   echo "| \`mpirun -n 2 pilegroup run single_pile\` | $t_mpi |"
+  echo "| \`docker stop\` ($stopsignal to \`mpirun\` after the first checkpoint): $(grep '^exit' "$root/stop.log"), summary \`interrupted\` | $t_stop |"
   echo "| tests: \`$tests_line\` ($tests_summary) | $t_tests |"
   echo "| the same serial run in the repository's .venv | $t_venv |"
   echo
