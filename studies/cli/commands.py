@@ -20,9 +20,12 @@ import os
 import shlex
 import signal
 import sys
+import threading
 import traceback
 from collections.abc import Sequence
 from pathlib import Path
+
+from tqdm import tqdm
 
 from pilegroup.errors import OutputError, RunInterrupted
 from pilegroup.fileio import write_text_atomic
@@ -361,7 +364,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     and Open MPI's ``mpirun`` closes its connections to the ranks as soon as one rank exits
     with a non-zero code, while the others still finalise: measured on a run stopped by
     SIGUSR1 on two ranks, which ended with 59 instead of 138 (docs/checkpoint.md, "Signals").
+
+    The progress bars lock with a thread lock: tqdm's default, a ``multiprocessing`` lock,
+    starts a resource-tracker process under Python 3.14 (forkserver), which Open MPI's SIGUSR1
+    to the rank's processes killed, with two warnings after the stop line (measured).
     """
+    tqdm.set_lock(threading.RLock())
     try:
         return _main(argv)
     finally:
