@@ -60,17 +60,17 @@ def _cache_key(spec: GeometrySpec) -> str:
 
 
 def _restore_python_signal_handlers() -> None:
-    """Re-arm Python's stop-signal handlers, which gmsh's library replaces at the C level.
+    """Re-arm Python's signal handlers, which gmsh's library replaces at the C level.
 
     ``gmshInitialize``/``gmshFinalize`` set their own (or the default) actions; Python's
-    record (``signal.getsignal``) is unchanged, so setting it again restores the handler a run
-    installed (e.g. a stop request: :mod:`pilegroup.studies.run.interrupt`).
+    record (``signal.getsignal``) is unchanged, so setting it again restores every handler
+    written in Python (e.g. the stop requests of a run: :mod:`pilegroup.studies.run.interrupt`).
     """
     if threading.current_thread() is not threading.main_thread():
         return
-    for s in (signal.SIGTERM, signal.SIGINT, signal.SIGUSR1):
+    for s in signal.valid_signals():
         handler = signal.getsignal(s)
-        if handler is not None:
+        if callable(handler):
             signal.signal(s, handler)
 
 

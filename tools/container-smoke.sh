@@ -3,8 +3,8 @@
 #
 # Builds the image's file system in a root of Debian unstable made by debootstrap, following the
 # Dockerfile's instructions one by one (FROM, ARG, ENV, RUN, USER, WORKDIR, COPY, CMD,
-# STOPSIGNAL): RUN is `/bin/sh -c` through chroot as the Dockerfile's USER with its ENV and WORKDIR, COPY honours
-# .dockerignore. Then, as the image's user (as `docker run` would):
+# STOPSIGNAL): RUN is `/bin/sh -c` through chroot as the Dockerfile's USER with its ENV and
+# WORKDIR, COPY honours .dockerignore. Then, as the image's user (as `docker run` would):
 #   1. pilegroup --help;
 #   2. pilegroup run single_pile (serial) and mpirun -n 2 pilegroup run single_pile, timed; the
 #      image's STOPSIGNAL to a 2-rank run (what `docker stop` does): checkpoint, 128 + signal;

@@ -314,3 +314,23 @@ def test_paper_sizes_refine_monotonically(cache):
         errs.append(max(abs(meas["cells"][groups.pile(i)][1] / exact - 1) for i in range(1, 10)))
     assert all(a < b for a, b in zip(cells[:-1], cells[1:], strict=True))
     assert all(b <= a * (1 + 1e-12) for a, b in zip(errs[:-1], errs[1:], strict=True))
+
+
+def test_a_stop_signal_after_gmsh_is_still_a_stop_request():
+    # gmsh replaces the C-level actions when it starts and ends; the run's handlers must come
+    # back. In a subprocess: without them the signal would end the process.
+    code = """
+import os, signal
+import pilegroup
+from pilegroup.geometry.convert import gmsh_session
+from pilegroup.studies.run.interrupt import STOP_SIGNALS, requested, stop_on_signals
+for sig in STOP_SIGNALS:
+    with stop_on_signals():
+        with gmsh_session():
+            pass
+        os.kill(os.getpid(), sig)
+        print(sig.name, requested() == sig)
+"""
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stderr[-2000:]
+    assert r.stdout.split() == ["SIGTERM", "True", "SIGINT", "True", "SIGUSR1", "True"]

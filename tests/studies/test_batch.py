@@ -122,12 +122,11 @@ def _record(run):
     (1, signal.SIGTERM), pytest.param(2, signal.SIGUSR1, marks=pytest.mark.mpi),
     pytest.param(2, signal.SIGTERM, marks=pytest.mark.mpi)])
 def test_a_stop_signal_records_the_running_case_interrupted(tmp_path, small_pile, ranks, sig,
-                                                            mpirun_forwards_sigterm):
+                                                            needs_mpirun_forwarding_sigterm):
     """SIGTERM or SIGUSR1 (to mpirun: forwarded to every rank) stops the running cases at a
     step boundary; their records say interrupted, no other case starts, exit 128 + sig."""
-    if ranks > 1 and sig == signal.SIGTERM and not mpirun_forwards_sigterm:
-        pytest.skip("this mpirun ends the ranks at once on SIGTERM (Open MPI): SIGUSR1 is its "
-                    "stop request (docs/checkpoint.md)")
+    if ranks > 1 and sig == signal.SIGTERM:
+        needs_mpirun_forwarding_sigterm()
     plan = _plan(small_pile, f'[[case]]\nname = "slow"\nset = {SLOW}\n'
                  f'[[case]]\nname = "next"\nset = {SLOW}\n')
     out = tmp_path / "batch"

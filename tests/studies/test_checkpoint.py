@@ -196,10 +196,9 @@ def test_sigusr1_to_mpirun_stops_every_rank(stopped_on_two_ranks):
 
 
 @pytest.mark.mpi
-def test_sigterm_to_mpirun_stops_every_rank(tmp_path, scenario, cache, mpirun_forwards_sigterm):
-    if not mpirun_forwards_sigterm:
-        pytest.skip("this mpirun ends the ranks at once on SIGTERM (Open MPI): SIGUSR1 is its "
-                    "stop request (docs/checkpoint.md)")
+def test_sigterm_to_mpirun_stops_every_rank(tmp_path, scenario, cache,
+                                            needs_mpirun_forwarding_sigterm):
+    needs_mpirun_forwarding_sigterm()
     out = tmp_path / "run"
     proc, stderr = _start_and_signal(scenario, out, cache, signal.SIGTERM, ranks=2)
     _assert_stopped_on_two_ranks(proc, stderr, out, signal.SIGTERM)
