@@ -273,11 +273,10 @@ class SolverOptions:
     """Linear solver: a named preset of PETSc options merged with overrides.
 
     Attributes:
-        preset: a name of :data:`~pilegroup.solver.linsolve.PRESETS`: ``"direct"`` (MUMPS
-            LU), ``"direct_reuse"`` (GMRES on a kept LU), ``"fieldsplit_gamg"`` (FGMRES +
-            fixed-stress block Gauss–Seidel, GAMG with rigid-body near-nullspace on u) or
-            ``"fieldsplit_pier"`` (FGMRES + pressure / structure with the interface soil
-            nodes / soil block Gauss–Seidel, for piles joined by the interface).
+        preset: a name of :data:`~pilegroup.solver.linsolve.PRESETS` (docs/solver.md):
+            ``"direct"`` (MUMPS LU), ``"direct_reuse"`` (FGMRES on a kept single-precision
+            LU; ``"direct_reuse_double"`` in double precision), the field splits
+            ``"fieldsplit_gamg"``, ``"fieldsplit_pier"`` and ``"fieldsplit_kept"``.
         overrides: extra PETSc options (without prefix), applied after the preset.
         band_layers: cell layers of soil around the interface that join the structure's exact
             block of a ``fieldsplit_pier`` split (``linsolve.Preset.band_layers``); ``None``:

@@ -3,8 +3,9 @@
 Presets:
 
 * ``direct``: MUMPS LU (robust, for small and medium problems; the default).
-* ``direct_reuse``: GMRES on the current Jacobian preconditioned by a kept block low-rank
-  MUMPS LU.
+* ``direct_reuse``: FGMRES on the current Jacobian preconditioned by a kept block low-rank
+  MUMPS LU in single precision; ``direct_reuse_double``: the same LU in double precision (the
+  fallback of ``direct_reuse``).
 * ``fieldsplit_gamg``: FGMRES preconditioned by a block Gauss–Seidel (``multiplicative``
   field split) of the u–p system. The displacement block is solved by one GAMG V-cycle with the
   rigid-body near-nullspace; the pressure block of the preconditioning matrix carries the
@@ -46,6 +47,7 @@ a negative reason raises :class:`LinearSolveError` (a :class:`ConvergenceError`)
 from __future__ import annotations
 
 import dataclasses
+import functools
 import logging
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
@@ -120,20 +122,21 @@ PRESETS: dict[str, Preset] = {
             "mat_mumps_icntl_14": 80,  # workspace increase, percent
         },
     ),
-    # MUMPS LU reused across Newton iterations and steps as the preconditioner of GMRES on the
-    # current Jacobian: one factorisation serves many solves while the tangent changes little
-    # (consolidation, creep); a stale one (20 iterations more than its first solve needed) is
-    # refactored. Being only a preconditioner, the factorisation is block low-rank (BLR: fronts
-    # compressed to a relative accuracy of 1e-5, factors stored compressed), which cuts the
-    # run's memory on the quarter pier at h = 0.1 m in the same time (docs/benchmarks.md,
-    # "Block low-rank factorisations in whole runs"); GMRES on the exact Jacobian makes up the
-    # difference. The contribution blocks are not compressed (ICNTL(37) = 0): compressing them
-    # took 30 % more factorisation time for 4 % less memory, the same GMRES iterations.
+    # MUMPS LU reused across Newton iterations and steps as the preconditioner of FGMRES on
+    # the current Jacobian: one factorisation serves many solves while the tangent changes
+    # little (consolidation, creep); a stale one (20 iterations more than its first solve
+    # needed) is refactored. Being only a preconditioner, it is block low-rank (BLR: fronts
+    # compressed to 1e-5, factors stored compressed; contribution blocks not, ICNTL(37) = 0,
+    # which is 30 % faster for 4 % more memory) and single precision: 40 % less time per
+    # solve and per factorisation, half the factors' memory. FGMRES builds the correction from
+    # its preconditioned vectors, so its residual is the true one although a single-precision
+    # solve is linear only to rounding (with GMRES the inexact Newton test was missed). A step
+    # whose fresh factorisation does not converge hands over to the same in double precision.
+    # docs/solver.md and docs/benchmarks.md ("Single-precision factorisations").
     "direct_reuse": Preset(
         "direct_reuse",
         {
-            "ksp_type": "gmres",
-            "ksp_pc_side": "right",  # the true residual, which the inexact Newton test needs
+            "ksp_type": "fgmres",  # right-preconditioned: the true residual (inexact Newton)
             "ksp_rtol": 1e-10,
             "ksp_atol": 1e-14,
             "ksp_max_it": 60,
@@ -144,8 +147,10 @@ PRESETS: dict[str, Preset] = {
             "mat_mumps_icntl_35": 2,  # BLR factorisation, compressed factors used in the solve
             "mat_mumps_cntl_7": 1e-5,  # BLR dropping tolerance (relative)
             "mat_mumps_icntl_37": 0,  # contribution blocks not compressed (faster)
+            "pc_precision": "single",  # MUMPS factorises and solves in single precision
         },
         reuse_factor_its=20,
+        fallback="direct_reuse_double",
         forcing=True,
     ),
     "fieldsplit_gamg": Preset(
@@ -201,6 +206,9 @@ PRESETS: dict[str, Preset] = {
         fallback="direct_reuse",
     ),
 }
+PRESETS["direct_reuse_double"] = dataclasses.replace(
+    PRESETS["direct_reuse"], name="direct_reuse_double", fallback=None,
+    options={**PRESETS["direct_reuse"].options, "pc_precision": "double"})
 PRESETS["fieldsplit_kept"] = dataclasses.replace(
     PRESETS["fieldsplit_pier"], name="fieldsplit_kept", keep_blocks=("structure",), keep_its=60)
 
@@ -219,10 +227,45 @@ def get_preset(name: str) -> Preset:
 
 
 def merged_options(name: str, overrides: Mapping[str, Any] | None = None) -> dict[str, Any]:
-    """Options of preset ``name`` updated by ``overrides`` (keys without prefix)."""
+    """Options of preset ``name`` updated by ``overrides`` (keys without prefix).
+
+    A single-precision MUMPS factorisation (``pc_precision = single``) becomes a double one,
+    with one warning line, where the PETSc build's MUMPS has no single precision.
+    """
     opts = dict(get_preset(name).options)
     opts.update(dict(overrides or {}))
+    if str(opts.get("pc_precision", "")).lower() == "single" and not mumps_single_precision():
+        opts["pc_precision"] = "double"
     return opts
+
+
+@functools.cache
+def mumps_single_precision() -> bool:
+    """Whether this PETSc's MUMPS factorises in single precision (a 1 x 1 trial, once)."""
+    A = PETSc.Mat().createAIJ([1, 1], nnz=1, comm=PETSc.COMM_SELF)
+    A.setValue(0, 0, 2.0)
+    A.assemble()
+    ksp = PETSc.KSP().create(PETSc.COMM_SELF)
+    prefix, opts = "pilegroup_precision_trial_", PETSc.Options()
+    opts[f"{prefix}pc_precision"] = "single"
+    try:
+        ksp.setOptionsPrefix(prefix)
+        ksp.setOperators(A)
+        ksp.setType("preonly")
+        ksp.getPC().setType("lu")
+        ksp.getPC().setFactorSolverType("mumps")
+        ksp.setFromOptions()
+        ksp.setUp()
+        ok = True
+    except PETSc.Error:
+        ok = False
+        log.warning("this PETSc's MUMPS has no single precision: the kept LU of "
+                    "'direct_reuse' is factorised in double precision (docs/solver.md)")
+    finally:
+        opts.delValue(f"{prefix}pc_precision")
+        ksp.destroy()
+        A.destroy()
+    return ok
 
 
 def create_ksp(

@@ -51,17 +51,20 @@ VERTICES_PER_CELL = 1.15
 UNKNOWNS_PER_VERTEX = {"Q1Q1": 4, "Q2Q1": 25}
 
 #: (unknowns, peak MB of the largest of 2 ranks) per solver family, docs/benchmarks.md: the
-#: kept LU (``direct_reuse``; quarter pier 1 m and 0.1 m with block low-rank, "Block low-rank
-#: factorisations in whole runs"; full pier 1 m and 0.3 m without it, "make run with the
-#: quarter model" and "Iterative preconditioners"), the field split (``fieldsplit_pier``,
-#: quarter 1 m, full 1 m and full 0.3 m with the band of 7 layers).
+#: double-precision LU (``direct_reuse_double``; quarter pier 1 m and 0.1 m with block
+#: low-rank, "Block low-rank factorisations in whole runs"; full pier 1 m and 0.3 m without it,
+#: "make run with the quarter model" and "Iterative preconditioners"), the single-precision
+#: kept LU (``direct_reuse``: quarter 1 m, full 1 m, 0.3 m and 0.1 m, "Single-precision
+#: factorisations"), the field split (``fieldsplit_pier``, quarter 1 m, full 1 m and full
+#: 0.3 m with the band of 7 layers).
 MEASURED_PEAKS: dict[str, tuple[tuple[int, float], ...]] = {
     "lu": ((80_853, 1390.0), (164_679, 2473.0), (274_180, 7000.0), (426_116, 9800.0)),
+    "lu_single": ((80_853, 1152.0), (301_772, 4327.0), (426_116, 4739.0), (623_988, 6359.0)),
     "split": ((80_853, 1200.0), (301_772, 4100.0), (426_116, 6600.0)),
 }
-#: The family of each preset (``direct`` factors every matrix: the kept LU's family).
-FAMILY = {"direct": "lu", "direct_reuse": "lu", "fieldsplit_pier": "split",
-          "fieldsplit_kept": "split", "fieldsplit_gamg": "split"}
+#: The family of each preset (``direct`` factors every matrix: the double LU's family).
+FAMILY = {"direct": "lu", "direct_reuse": "lu_single", "direct_reuse_double": "lu",
+          "fieldsplit_pier": "split", "fieldsplit_kept": "split", "fieldsplit_gamg": "split"}
 
 
 def _fit(points: tuple[tuple[int, float], ...], ranks: int = 2) -> tuple[float, float]:

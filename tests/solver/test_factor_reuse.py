@@ -87,3 +87,38 @@ def test_forcing_keeps_newton_and_the_answer(tmp_path, monkeypatch, small_pile):
     assert out[0.1][0] == pytest.approx(out[0.0][0], rel=1e-8)
     assert out[0.1][1] == out[0.0][1]
     assert out[0.1][2] < out[0.0][2]
+
+
+def test_kept_lu_is_single_precision(monkeypatch):
+    """``direct_reuse`` factorises in single precision (one solve with a fresh factorisation
+    leaves a residual of single-precision size, the double preset one of double size); a
+    PETSc whose MUMPS has no single precision gets the double factorisation instead."""
+    from petsc4py import PETSc
+
+    from pilegroup.solver import linsolve
+
+    n = 400
+    A = PETSc.Mat().createAIJ([n, n], nnz=3, comm=PETSc.COMM_SELF)
+    for i in range(n):  # a 1D Laplacian with a shift: well conditioned, not trivial
+        A.setValue(i, i, 2.5)
+        if i:
+            A.setValue(i, i - 1, -1.0)
+            A.setValue(i - 1, i, -1.0)
+    A.assemble()
+    b, x, r = A.createVecLeft(), A.createVecLeft(), A.createVecLeft()
+    b.setArray(np.sin(np.arange(n) + 1.0))
+    residual = {}
+    for preset in ("direct_reuse", "direct_reuse_double"):
+        ksp = linsolve.create_ksp(MPI.COMM_SELF, A, None, f"prec_{preset}_", preset,
+                                  {"ksp_max_it": 1, "mat_mumps_icntl_35": 0})
+        ksp.setConvergenceTest(lambda *args: 0)  # one iteration, whatever it reaches
+        ksp.solve(b, x)
+        A.mult(x, r)
+        r.axpy(-1.0, b)
+        residual[preset] = r.norm() / b.norm()
+        ksp.destroy()
+    assert 1e-9 < residual["direct_reuse"] < 1e-4  # single: about 1e-7
+    assert residual["direct_reuse_double"] < 1e-12
+    assert linsolve.mumps_single_precision()
+    monkeypatch.setattr(linsolve, "mumps_single_precision", lambda: False)
+    assert linsolve.merged_options("direct_reuse")["pc_precision"] == "double"

@@ -39,15 +39,19 @@ def _run(preset, overrides=None, stages=None):
     return pb, log
 
 
-def test_failing_fieldsplit_falls_back_to_direct_reuse(caplog):
-    """An instantaneous (undrained) load step that fieldsplit cannot solve: the fallback solves
-    the same step, so the answer is the direct solver's."""
+@pytest.mark.parametrize(("preset", "fallback"), [("fieldsplit_gamg", "direct_reuse"),
+                                                ("direct_reuse", "direct_reuse_double")])
+def test_a_failing_preset_falls_back(caplog, preset, fallback):
+    """An instantaneous (undrained) load step that the preset cannot solve (one Krylov
+    iteration allowed): its fallback solves the same step, so the answer is the direct
+    solver's. The split hands over to the kept LU; the kept single-precision LU to the same
+    method in double precision."""
     ref, ref_log = _run("direct")
     with caplog.at_level(logging.WARNING, logger="pilegroup.solver.linsolve"):
-        pb, log = _run("fieldsplit_gamg", {"ksp_max_it": 1})
-    assert pb.linear_solver.preset == "direct_reuse"
+        pb, log = _run(preset, {"ksp_max_it": 1})
+    assert pb.linear_solver.preset == fallback
     assert len(pb.linear_solver.fallbacks) == 1
-    assert "'fieldsplit_gamg' failed" in pb.linear_solver.fallbacks[0]
+    assert f"'{preset}' failed" in pb.linear_solver.fallbacks[0]
     if MPI.COMM_WORLD.rank == 0:
         warnings = [r for r in caplog.records if r.levelno == logging.WARNING]
         assert len(warnings) == 1
