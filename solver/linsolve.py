@@ -126,13 +126,13 @@ PRESETS: dict[str, Preset] = {
     # the current Jacobian: one factorisation serves many solves while the tangent changes
     # little (consolidation, creep); a stale one (20 iterations more than its first solve
     # needed) is refactored. Being only a preconditioner, it is block low-rank (BLR: fronts
-    # compressed to 1e-5, factors stored compressed; contribution blocks not, ICNTL(37) = 0,
-    # which is 30 % faster for 4 % more memory) and single precision: 40 % less time per
-    # solve and per factorisation, half the factors' memory. FGMRES builds the correction from
-    # its preconditioned vectors, so its residual is the true one although a single-precision
-    # solve is linear only to rounding (with GMRES the inexact Newton test was missed). A step
-    # whose fresh factorisation does not converge hands over to the same in double precision.
-    # docs/solver.md and docs/benchmarks.md ("Single-precision factorisations").
+    # compressed to 1e-6, which needs fewer iterations and refactorisations than 1e-5; factors
+    # stored compressed; contribution blocks not, ICNTL(37) = 0: 30 % faster, 4 % more memory)
+    # and single precision: 40 % less time per solve and per factorisation, half the factors'
+    # memory. FGMRES builds the correction from its preconditioned vectors, so its residual is
+    # the true one although a single-precision solve is linear only to rounding (with GMRES
+    # the inexact Newton test was missed). A step whose fresh factorisation does not converge
+    # hands over to the same in double precision. docs/solver.md, docs/benchmarks.md.
     "direct_reuse": Preset(
         "direct_reuse",
         {
@@ -145,7 +145,7 @@ PRESETS: dict[str, Preset] = {
             "pc_factor_mat_solver_type": "mumps",
             "mat_mumps_icntl_14": 80,
             "mat_mumps_icntl_35": 2,  # BLR factorisation, compressed factors used in the solve
-            "mat_mumps_cntl_7": 1e-5,  # BLR dropping tolerance (relative)
+            "mat_mumps_cntl_7": 1e-6,  # BLR dropping tolerance (relative)
             "mat_mumps_icntl_37": 0,  # contribution blocks not compressed (faster)
             "pc_precision": "single",  # MUMPS factorises and solves in single precision
         },

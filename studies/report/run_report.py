@@ -47,22 +47,24 @@ def _at(t: np.ndarray, v: np.ndarray, tq: float | None) -> float | None:
     return float(np.interp(tq, t, v))
 
 
-def write_report(out_dir: Path) -> list[Path]:
+def write_report(out_dir: Path, share: tuple[int, int] = (0, 1)) -> list[Path]:
     """Write the PNG figures of the run in ``out_dir`` to ``out_dir/plots``; return their paths.
 
     The :data:`FIGURES`, then the 3D view ``view3d.png`` of the XDMF results at the last
     output time (:mod:`pilegroup.studies.report.view3d`). Figures whose data are missing are skipped
-    with a logged message.
+    with a logged message. ``share = (k, n)``: only the figures ``k, k + n, ...`` of the list,
+    and the 3D view if ``k = n - 1``, so that ``n`` processes write the report together.
     """
+    k, n = share
     run = load_run(Path(out_dir))
     written = []
-    for name, _, needs, plot in FIGURES:
+    for name, _, needs, plot in FIGURES[k::n]:
         if not run.has(needs):
             log.info("skipping %s: no %s data", name, needs.replace("|", " or "))
             continue
         written.append(save_figure(plot(run), run.out_dir / "plots" / name))
         log.info("wrote %s", written[-1])
-    view = write_view3d(run.out_dir, run.summary.get("scenario"))
+    view = write_view3d(run.out_dir, run.summary.get("scenario")) if k == n - 1 else None
     if view is not None:
         written.append(view)
         log.info("wrote %s", view)

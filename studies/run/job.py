@@ -83,9 +83,8 @@ def _locked_run(sc: Scenario, out: Path, stop_after: str, comm: MPI.Comm, resume
             remove_checkpoint(out)
     try:
         summary = _run(sc, geo, out, stop_after, comm, t0, manifest, memory)
-        if comm.rank == 0 and summary["solver"] is not None and sc.outputs.plots:
-            for path in write_report(out):  # a figure not written fails the run too
-                log.info("wrote %s", path)
+        if summary["solver"] is not None and sc.outputs.plots:
+            _write_plots(out, comm)
     except RunInterrupted as exc:
         _write_interrupted(out, sc, comm, exc, t0)
         raise
@@ -120,6 +119,19 @@ def _run(sc: Scenario, geo: ResolvedGeometry, out: Path, stop_after: str, comm: 
     if comm.rank == 0:
         log.info("wrote %s", write_job_summary(out, summary))
     return summary
+
+
+def _write_plots(out: Path, comm: MPI.Comm) -> None:
+    """The report's figures, shared among the ranks (rank 0 lists them all).
+
+    A figure not written fails the run too (an :class:`~pilegroup.errors.OutputError` on the
+    rank that wrote it ends every rank).
+    """
+    comm.Barrier()  # rank 0 has written summary.json, which the figures read
+    paths = comm.gather(write_report(out, (comm.rank, comm.size)), root=0)
+    if comm.rank == 0:
+        for path in sorted(p for part in paths for p in part):
+            log.info("wrote %s", path)
 
 
 def _plots_of_what_was_reached(out: Path) -> None:

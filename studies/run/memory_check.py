@@ -59,7 +59,7 @@ UNKNOWNS_PER_VERTEX = {"Q1Q1": 4, "Q2Q1": 25}
 #: 0.3 m with the band of 7 layers).
 MEASURED_PEAKS: dict[str, tuple[tuple[int, float], ...]] = {
     "lu": ((80_853, 1390.0), (164_679, 2473.0), (274_180, 7000.0), (426_116, 9800.0)),
-    "lu_single": ((80_853, 1152.0), (301_772, 4327.0), (426_116, 4739.0), (623_988, 6359.0)),
+    "lu_single": ((80_853, 1143.0), (301_772, 4034.0), (426_116, 4828.0), (623_988, 7351.0)),
     "split": ((80_853, 1200.0), (301_772, 4100.0), (426_116, 6600.0)),
 }
 #: The family of each preset (``direct`` factors every matrix: the double LU's family).

@@ -69,5 +69,5 @@ def test_force_lets_the_run_go_on(small_pile):
     assert rec["forced"] and rec["estimate_mb_per_rank"] > rec["available_mb_per_rank"]
     # the fit goes through the measured peaks it was made from (docs/benchmarks.md)
     assert estimated_peak_mb(80_853, "direct_reuse_double", 2) == pytest.approx(1390.0, rel=0.1)
-    assert estimated_peak_mb(80_853, "direct_reuse", 2) == pytest.approx(1152.0, rel=0.1)
+    assert estimated_peak_mb(80_853, "direct_reuse", 2) == pytest.approx(1143.0, rel=0.1)
     assert estimated_peak_mb(426_116, "fieldsplit_pier", 2) == pytest.approx(6600.0, rel=0.1)

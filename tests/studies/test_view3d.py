@@ -52,6 +52,11 @@ def test_report_redraws_the_view_and_skips_partial_output(small_pile_run, tmp_pa
     out = shutil.copytree(small_pile_run, tmp_path / "run")
     (out / "plots" / FILE).unlink()
     assert FILE in [p.name for p in write_report(out)]  # what `pilegroup report OUT` does
+    # shared between two ranks: each figure written once, the 3D view by the last
+    whole = sorted(p.name for p in write_report(out))
+    first, second = ([p.name for p in write_report(out, (k, 2))] for k in (0, 1))
+    assert sorted(first + second) == whole and not set(first) & set(second)
+    assert FILE in second and len(first) >= len(second) - 1
     tied = not (out / "results_structure.xdmf").exists()
     # an interrupted run, one output behind (interface mode: the structure file only, and the
     # view takes the last time common to both files): drawn at 0.5 day
