@@ -346,7 +346,8 @@ class LinearSolver:
     ``options`` are PETSc option names without the problem prefix. ``auto`` takes the preset
     measured fastest for the system's model part, interface and size
     (``studies.run.auto_preset.AUTO_TABLE``, docs/solver.md); a failing ``fieldsplit_gamg``,
-    ``fieldsplit_pier`` or ``fieldsplit_kept`` falls back to ``direct_reuse``.
+    ``fieldsplit_pier`` or ``fieldsplit_kept`` falls back to ``direct_reuse`` (a kept LU in
+    single precision), which falls back to ``direct_reuse_double`` (the same in double).
 
     ``krylov_forcing``: inexact Newton (presets whose Krylov solve supports it, e.g.
     ``direct_reuse``): a Newton correction's Krylov solve stops once every block's linear
@@ -354,8 +355,8 @@ class LinearSolver:
     preset's relative tolerance (docs/solver.md, "Inexact Newton").
     """
 
-    preset: Literal["auto", "direct", "direct_reuse", "fieldsplit_gamg", "fieldsplit_pier",
-                    "fieldsplit_kept"] = "auto"
+    preset: Literal["auto", "direct", "direct_reuse", "direct_reuse_double", "fieldsplit_gamg",
+                    "fieldsplit_pier", "fieldsplit_kept"] = "auto"
     options: dict[str, str | int | float | bool] = field(default_factory=dict)
     krylov_forcing: float = 0.1
 
