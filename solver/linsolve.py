@@ -259,8 +259,8 @@ def mumps_single_precision() -> bool:
         ok = True
     except PETSc.Error:
         ok = False
-        log.warning("this PETSc's MUMPS has no single precision: the kept LU of "
-                    "'direct_reuse' is factorised in double precision (docs/solver.md)")
+        log.warning("this PETSc's MUMPS has no single precision: MUMPS factorisations asked "
+                    "for in single precision (direct_reuse) are made in double (docs/solver.md)")
     finally:
         opts.delValue(f"{prefix}pc_precision")
         ksp.destroy()

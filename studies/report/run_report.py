@@ -52,8 +52,9 @@ def write_report(out_dir: Path, share: tuple[int, int] = (0, 1)) -> list[Path]:
 
     The :data:`FIGURES`, then the 3D view ``view3d.png`` of the XDMF results at the last
     output time (:mod:`pilegroup.studies.report.view3d`). Figures whose data are missing are skipped
-    with a logged message. ``share = (k, n)``: only the figures ``k, k + n, ...`` of the list,
-    and the 3D view if ``k = n - 1``, so that ``n`` processes write the report together.
+    with a logged message; the caller lists the paths written. ``share = (k, n)``: only the
+    figures ``k, k + n, ...`` of the list, and the 3D view if ``k = n - 1``, so that ``n``
+    processes write the report together.
     """
     k, n = share
     run = load_run(Path(out_dir))
@@ -63,11 +64,9 @@ def write_report(out_dir: Path, share: tuple[int, int] = (0, 1)) -> list[Path]:
             log.info("skipping %s: no %s data", name, needs.replace("|", " or "))
             continue
         written.append(save_figure(plot(run), run.out_dir / "plots" / name))
-        log.info("wrote %s", written[-1])
     view = write_view3d(run.out_dir, run.summary.get("scenario")) if k == n - 1 else None
     if view is not None:
         written.append(view)
-        log.info("wrote %s", view)
     return written
 
 
