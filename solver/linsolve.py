@@ -22,9 +22,9 @@ Presets:
   of the fixed-stress matrix by MUMPS LU (the fixed-stress split: pressure first; the order
   mechanics first does not converge even with exact blocks), then the structure (piles and cap)
   together with the soil displacement at the interface nodes and a band of cell layers of soil
-  around them by MUMPS LU (the stiff springs and the 10^4 stiffness contrast stay inside one
-  exact block), then the soil other than the interface nodes by one GAMG V-cycle (rigid-body
-  near-nullspace, unsmoothed aggregation, four Chebyshev steps each of two SOR sweeps:
+  around them by MUMPS LU (the stiff springs and the 10^4 stiffness contrast stay inside one block;
+  both LUs in single precision), then the soil other than the interface nodes by one GAMG V-cycle
+  (rigid-body near-nullspace, unsmoothed aggregation, four Chebyshev steps each of two SOR sweeps:
   Chebyshev/Jacobi needs 3.5 times the iterations, one sweep per step 1.3 to 1.7 times). The
   two displacement blocks overlap on the band of soil, which makes the split a multiplicative
   Schwarz method there. The band's width in metres, not its layer count, sets the iterations,
@@ -123,16 +123,13 @@ PRESETS: dict[str, Preset] = {
         },
     ),
     # MUMPS LU reused across Newton iterations and steps as the preconditioner of FGMRES on
-    # the current Jacobian: one factorisation serves many solves while the tangent changes
-    # little (consolidation, creep); a stale one (20 iterations more than its first solve
-    # needed) is refactored. Being only a preconditioner, it is block low-rank (BLR: fronts
-    # compressed to 1e-6, which needs fewer iterations and refactorisations than 1e-5; factors
-    # stored compressed; contribution blocks not, ICNTL(37) = 0: 30 % faster, 4 % more memory)
-    # and single precision: 40 % less time per solve and per factorisation, half the factors'
-    # memory. FGMRES builds the correction from its preconditioned vectors, so its residual is
-    # the true one although a single-precision solve is linear only to rounding (with GMRES
-    # the inexact Newton test was missed). A step whose fresh factorisation does not converge
-    # hands over to the same in double precision. docs/solver.md, docs/benchmarks.md.
+    # the current Jacobian while the tangent changes little (consolidation, creep); refactored
+    # after a solve needing 20 iterations more than its first. Being a preconditioner, it is
+    # block low-rank (1e-6: fewer iterations and refactorisations than 1e-5; contribution
+    # blocks uncompressed: 30 % faster, 4 % more memory) and single precision (40 % less time
+    # per solve and factorisation, half the memory). FGMRES's residual is the true one although
+    # a single-precision solve is linear only to rounding (GMRES missed the inexact Newton
+    # test). docs/solver.md, docs/benchmarks.md.
     "direct_reuse": Preset(
         "direct_reuse",
         {
@@ -189,7 +186,8 @@ PRESETS: dict[str, Preset] = {
             "pc_fieldsplit_type": "multiplicative",
             **{f"fieldsplit_{b}_{k}": v for b in ("p", "structure") for k, v in (
                 ("ksp_type", "preonly"), ("pc_type", "lu"),
-                ("pc_factor_mat_solver_type", "mumps"), ("mat_mumps_icntl_14", 80))},
+                ("pc_factor_mat_solver_type", "mumps"), ("mat_mumps_icntl_14", 80),
+                ("pc_precision", "single"))},
             "fieldsplit_soil_ksp_type": "preonly",
             "fieldsplit_soil_pc_type": "gamg",
             "fieldsplit_soil_pc_gamg_threshold": 0.02,
@@ -229,13 +227,14 @@ def get_preset(name: str) -> Preset:
 def merged_options(name: str, overrides: Mapping[str, Any] | None = None) -> dict[str, Any]:
     """Options of preset ``name`` updated by ``overrides`` (keys without prefix).
 
-    A single-precision MUMPS factorisation (``pc_precision = single``) becomes a double one,
-    with one warning line, where the PETSc build's MUMPS has no single precision.
+    Single-precision MUMPS factorisations (``[<block>_]pc_precision = single``) become double
+    ones, with one warning line, where the PETSc build's MUMPS has no single precision.
     """
     opts = dict(get_preset(name).options)
     opts.update(dict(overrides or {}))
-    if str(opts.get("pc_precision", "")).lower() == "single" and not mumps_single_precision():
-        opts["pc_precision"] = "double"
+    single = [k for k, v in opts.items() if k.endswith("pc_precision") and f"{v}" == "single"]
+    if single and not mumps_single_precision():
+        opts.update(dict.fromkeys(single, "double"))
     return opts
 
 
@@ -260,7 +259,8 @@ def mumps_single_precision() -> bool:
     except PETSc.Error:
         ok = False
         log.warning("this PETSc's MUMPS has no single precision: MUMPS factorisations asked "
-                    "for in single precision (direct_reuse) are made in double (docs/solver.md)")
+                    "for in single precision (direct_reuse, the field splits' LU blocks) are "
+                    "made in double (docs/solver.md)")
     finally:
         opts.delValue(f"{prefix}pc_precision")
         ksp.destroy()

@@ -122,3 +122,39 @@ def test_kept_lu_is_single_precision(monkeypatch):
     assert linsolve.mumps_single_precision()
     monkeypatch.setattr(linsolve, "mumps_single_precision", lambda: False)
     assert linsolve.merged_options("direct_reuse")["pc_precision"] == "double"
+
+
+def test_split_lu_blocks_are_single_precision(monkeypatch):
+    """The field splits factorise their pressure and structure blocks in single precision
+    (one application of each block's LU leaves a residual of single-precision size); a PETSc
+    whose MUMPS has no single precision gets double factorisations of them instead."""
+    from petsc4py import PETSc
+
+    from pilegroup.solver import linsolve
+
+    n = 300
+    A = PETSc.Mat().createAIJ([n, n], nnz=3, comm=PETSc.COMM_SELF)
+    for i in range(n):  # three decoupled shifted 1D Laplacians, one per block
+        A.setValue(i, i, 2.5)
+        if i % 100:
+            A.setValue(i, i - 1, -1.0)
+            A.setValue(i - 1, i, -1.0)
+    A.assemble()
+    blocks = [(name, PETSc.IS().createStride(100, 100 * k, 1, comm=PETSc.COMM_SELF), None)
+              for k, name in enumerate(("p", "structure", "soil"))]
+    ksp = linsolve.create_ksp(MPI.COMM_SELF, A, None, "prec_split_", "fieldsplit_pier", None,
+                              blocks)
+    ksp.setUp()
+    for name, sub in zip(("p", "structure"), ksp.getPC().getFieldSplitSubKSP()[:2], strict=True):
+        B = sub.getOperators()[0]
+        x, y, r = B.createVecLeft(), B.createVecLeft(), B.createVecLeft()
+        x.setArray(np.sin(np.arange(100) + 1.0))
+        sub.getPC().apply(x, y)
+        B.mult(y, r)
+        r.axpy(-1.0, x)
+        assert 1e-9 < r.norm() / x.norm() < 1e-4, name  # single: about 1e-7
+    ksp.destroy()
+    monkeypatch.setattr(linsolve, "mumps_single_precision", lambda: False)
+    opts = linsolve.merged_options("fieldsplit_kept")
+    assert opts["fieldsplit_p_pc_precision"] == opts["fieldsplit_structure_pc_precision"] \
+        == "double"
