@@ -232,7 +232,7 @@ def merged_options(name: str, overrides: Mapping[str, Any] | None = None) -> dic
     """
     opts = dict(get_preset(name).options)
     opts.update(dict(overrides or {}))
-    single = [k for k, v in opts.items() if k.endswith("pc_precision") and f"{v}" == "single"]
+    single = [k for k in opts if k.endswith("pc_precision") and f"{opts[k]}".lower() == "single"]
     if single and not mumps_single_precision():
         opts.update(dict.fromkeys(single, "double"))
     return opts
