@@ -89,22 +89,29 @@ def test_forcing_keeps_newton_and_the_answer(tmp_path, monkeypatch, small_pile):
     assert out[0.1][2] < out[0.0][2]
 
 
+def _shifted_laplacian(n: int, block: int):
+    """``n`` x ``n`` serial AIJ: 1D Laplacians of ``block`` rows each, shifted (diagonal 2.5):
+    well conditioned, not trivial."""
+    from petsc4py import PETSc
+
+    A = PETSc.Mat().createAIJ([n, n], nnz=3, comm=PETSc.COMM_SELF)
+    for i in range(n):
+        A.setValue(i, i, 2.5)
+        if i % block:
+            A.setValue(i, i - 1, -1.0)
+            A.setValue(i - 1, i, -1.0)
+    A.assemble()
+    return A
+
+
 def test_kept_lu_is_single_precision(monkeypatch):
     """``direct_reuse`` factorises in single precision (one solve with a fresh factorisation
     leaves a residual of single-precision size, the double preset one of double size); a
     PETSc whose MUMPS has no single precision gets the double factorisation instead."""
-    from petsc4py import PETSc
-
     from pilegroup.solver import linsolve
 
     n = 400
-    A = PETSc.Mat().createAIJ([n, n], nnz=3, comm=PETSc.COMM_SELF)
-    for i in range(n):  # a 1D Laplacian with a shift: well conditioned, not trivial
-        A.setValue(i, i, 2.5)
-        if i:
-            A.setValue(i, i - 1, -1.0)
-            A.setValue(i - 1, i, -1.0)
-    A.assemble()
+    A = _shifted_laplacian(n, n)
     b, x, r = A.createVecLeft(), A.createVecLeft(), A.createVecLeft()
     b.setArray(np.sin(np.arange(n) + 1.0))
     residual = {}
@@ -132,14 +139,7 @@ def test_split_lu_blocks_are_single_precision(monkeypatch):
 
     from pilegroup.solver import linsolve
 
-    n = 300
-    A = PETSc.Mat().createAIJ([n, n], nnz=3, comm=PETSc.COMM_SELF)
-    for i in range(n):  # three decoupled shifted 1D Laplacians, one per block
-        A.setValue(i, i, 2.5)
-        if i % 100:
-            A.setValue(i, i - 1, -1.0)
-            A.setValue(i - 1, i, -1.0)
-    A.assemble()
+    A = _shifted_laplacian(300, 100)  # three decoupled blocks, one per split
     blocks = [(name, PETSc.IS().createStride(100, 100 * k, 1, comm=PETSc.COMM_SELF), None)
               for k, name in enumerate(("p", "structure", "soil"))]
     ksp = linsolve.create_ksp(MPI.COMM_SELF, A, None, "prec_split_", "fieldsplit_pier", None,
