@@ -47,7 +47,6 @@ a negative reason raises :class:`LinearSolveError` (a :class:`ConvergenceError`)
 from __future__ import annotations
 
 import dataclasses
-import functools
 import logging
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
@@ -57,6 +56,7 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from pilegroup.errors import LinearSolveError, SolverInputError
+from pilegroup.solver.mumps import OOC_FOLDER_OPTION, OutOfCoreFolder, mumps_single_precision
 
 log = logging.getLogger(__name__)
 
@@ -97,6 +97,8 @@ class Preset:
             below 1. Needs a right-preconditioned Krylov method (its residual norm is the true
             one) and a preconditioner built from the weighted matrix itself (not a field split,
             whose blocks come from the fixed-stress matrix).
+        out_of_core: MUMPS writes the factors to files in a folder of their own per rank
+            (:class:`~pilegroup.solver.mumps.OutOfCoreFolder`), removed when the solver closes.
     """
 
     name: str
@@ -110,6 +112,7 @@ class Preset:
     keep_blocks: tuple[str, ...] = ()
     keep_its: int = 0
     forcing: bool = False
+    out_of_core: bool = False
 
 
 PRESETS: dict[str, Preset] = {
@@ -207,6 +210,14 @@ PRESETS: dict[str, Preset] = {
 PRESETS["direct_reuse_double"] = dataclasses.replace(
     PRESETS["direct_reuse"], name="direct_reuse_double", fallback=None,
     options={**PRESETS["direct_reuse"].options, "pc_precision": "double"})
+# the kept LU with its factors out of core, for memory budgets the in-core factors exceed:
+# block low-rank factorisation with the factors written uncompressed (icntl_35 = 3; with the
+# compressed factors, icntl_35 = 2, MUMPS kept 9.1 of the in-core 10.1 GB on the full pier at
+# h = 0.3 m, with 3 it keeps 7.0 GB); solves read the files back (docs/benchmarks.md)
+PRESETS["direct_reuse_ooc"] = dataclasses.replace(
+    PRESETS["direct_reuse"], name="direct_reuse_ooc", out_of_core=True,
+    options={**PRESETS["direct_reuse"].options, "mat_mumps_icntl_22": 1,
+             "mat_mumps_icntl_35": 3})
 PRESETS["fieldsplit_kept"] = dataclasses.replace(
     PRESETS["fieldsplit_pier"], name="fieldsplit_kept", keep_blocks=("structure",), keep_its=60)
 
@@ -236,36 +247,6 @@ def merged_options(name: str, overrides: Mapping[str, Any] | None = None) -> dic
     if single and not mumps_single_precision():
         opts.update(dict.fromkeys(single, "double"))
     return opts
-
-
-@functools.cache
-def mumps_single_precision() -> bool:
-    """Whether this PETSc's MUMPS factorises in single precision (a 1 x 1 trial, once)."""
-    A = PETSc.Mat().createAIJ([1, 1], nnz=1, comm=PETSc.COMM_SELF)
-    A.setValue(0, 0, 2.0)
-    A.assemble()
-    ksp = PETSc.KSP().create(PETSc.COMM_SELF)
-    prefix, opts = "pilegroup_precision_trial_", PETSc.Options()
-    opts[f"{prefix}pc_precision"] = "single"
-    try:
-        ksp.setOptionsPrefix(prefix)
-        ksp.setOperators(A)
-        ksp.setType("preonly")
-        ksp.getPC().setType("lu")
-        ksp.getPC().setFactorSolverType("mumps")
-        ksp.setFromOptions()
-        ksp.setUp()
-        ok = True
-    except PETSc.Error:
-        ok = False
-        log.warning("this PETSc's MUMPS has no single precision: MUMPS factorisations asked "
-                    "for in single precision (direct_reuse, the field splits' LU blocks) are "
-                    "made in double (docs/solver.md)")
-    finally:
-        opts.delValue(f"{prefix}pc_precision")
-        ksp.destroy()
-        A.destroy()
-    return ok
 
 
 def create_ksp(
@@ -356,16 +337,17 @@ class KSPSolver:
         self._rhs_w: PETSc.Vec | None = None
         self._w_inv: PETSc.Vec | None = None
         self.ksp: PETSc.KSP | None = None
+        self._folder: OutOfCoreFolder | None = None  # out-of-core presets' factor files
         self._use(preset, overrides)
 
     def _use(self, preset: str, overrides: Mapping[str, Any] | None) -> None:
         """Build the KSP of ``preset`` (the previous preset's options are removed)."""
         spec = get_preset(preset)
-        if self.ksp is not None:
-            db = PETSc.Options()
-            for k in merged_options(self.preset, self._overrides):
-                db.delValue(f"{self.prefix}{k}")
-            self.ksp.destroy()
+        self.close()
+        overrides = dict(overrides or {})
+        if spec.out_of_core:  # a folder of this solver's own: MUMPS's files never mix
+            self._folder = OutOfCoreFolder(overrides.get(OOC_FOLDER_OPTION))
+            overrides[OOC_FOLDER_OPTION] = str(self._folder.path)
         splits = self._fieldsplit_data(spec) if spec.fieldsplit else None
         self.preset, self._overrides, self.spec = preset, overrides, spec
         self.ksp = create_ksp(self.comm, self.A, self._preconditioning(), self.prefix, preset,
@@ -375,6 +357,18 @@ class KSPSolver:
         self._kept = False  # the blocks of keep_blocks keep their set-up at the next one
         self._stale = False  # their set-up is older than the current matrix
         self._factor_undrained: bool | None = None  # constraints of the kept factorisation
+
+    def close(self) -> None:
+        """Destroy the KSP (MUMPS deletes its files) and remove the out-of-core folder."""
+        if self.ksp is not None:
+            db = PETSc.Options()
+            for k in merged_options(self.preset, self._overrides):
+                db.delValue(f"{self.prefix}{k}")
+            self.ksp.destroy()
+            self.ksp = None
+        if self._folder is not None:
+            self._folder.remove()
+            self._folder = None
 
     def _preconditioning(self) -> PETSc.Mat | None:
         return self.P if self.spec.fixed_stress else None

@@ -16,6 +16,7 @@ from __future__ import annotations
 import argparse
 import json
 import logging
+import math
 import os
 import shlex
 import signal
@@ -149,7 +150,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
     out = Path(args.out) if args.out else Path("out") / sc.name
     with stop_on_signals():  # a stop signal: checkpoint at the next step boundary, then stop
         summary = run_scenario(sc, out, mesh_size=args.mesh_size, stop_after=args.stop_after,
-                               resume=args.resume, force=args.force)
+                               resume=args.resume, force=args.force, memory_mb=args.memory)
     if _world_rank() == 0:
         print(json.dumps(summary, indent=2))
     return 0
@@ -170,7 +171,25 @@ def _run_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--force", action="store_true",
                    help="run even when the memory estimate per rank (printed for every run) "
                    "exceeds the memory available per rank (without it: exit 2 before meshing)")
+    p.add_argument("--memory", type=memory_size, default=None, metavar="SIZE",
+                   help="memory the run may use on each node, e.g. 8GB or 6000MB (default: what "
+                   "the node has available); with preset auto a run whose in-core factors "
+                   "would exceed it writes them out of core (TMPDIR)")
     p.set_defaults(func=_cmd_run)
+
+
+def memory_size(text: str) -> float:
+    """``--memory``'s value in MB: a number with its unit, MB or GB (1 GB = 1024 MB)."""
+    units = {"MB": 1.0, "GB": 1024.0}
+    value, unit = text.strip()[:-2], text.strip()[-2:].upper()
+    try:
+        mb = float(value) * units[unit]
+    except (KeyError, ValueError):
+        mb = math.nan
+    if not mb > 0.0 or math.isinf(mb):
+        raise argparse.ArgumentTypeError(
+            f"{text[:40]!r}: allowed: a positive size with its unit, e.g. 8GB or 6000MB")
+    return mb
 
 
 def _stiffness_arguments(p: argparse.ArgumentParser) -> None:

@@ -29,7 +29,8 @@ log = logging.getLogger(__name__)
 
 def run_scenario(sc: Scenario, out: Path, mesh_size: float | None = None,
                  stop_after: str = "solve", comm: MPI.Comm = MPI.COMM_WORLD,
-                 resume: bool = False, force: bool = False) -> JobSummary:
+                 resume: bool = False, force: bool = False,
+                 memory_mb: float | None = None) -> JobSummary:
     """Run scenario ``sc`` on ``comm`` and write its outputs to ``out``; returns the summary.
 
     Validate, write the resolved scenario (``scenario.json``), build the mesh once and write
@@ -47,7 +48,9 @@ def run_scenario(sc: Scenario, out: Path, mesh_size: float | None = None,
     Before anything is written or meshed the run's peak memory per rank is estimated and
     compared with the memory available
     (:func:`~pilegroup.studies.run.memory_check.memory_check`): a run that cannot fit raises
-    :class:`~pilegroup.errors.MachineTooSmall` unless ``force``.
+    :class:`~pilegroup.errors.MachineTooSmall` unless ``force``. ``memory_mb``: the memory
+    the run may use per node (``--memory``), below what is available; ``auto`` then turns to
+    the out-of-core kept LU where the in-core one would not fit.
 
     The run holds the lock of ``out`` for its life
     (:func:`~pilegroup.studies.run.folder_lock.folder_lock`): while another run holds it,
@@ -60,11 +63,11 @@ def run_scenario(sc: Scenario, out: Path, mesh_size: float | None = None,
     if resume and stop_after != "solve":
         raise ScenarioError("--stop-after", stop_after, "only 'solve' with --resume")
     with folder_lock(out, comm):
-        return _locked_run(sc, out, stop_after, comm, resume, t0, force)
+        return _locked_run(sc, out, stop_after, comm, resume, t0, force, memory_mb)
 
 
 def _locked_run(sc: Scenario, out: Path, stop_after: str, comm: MPI.Comm, resume: bool,
-                t0: float, force: bool = False) -> JobSummary:
+                t0: float, force: bool = False, memory_mb: float | None = None) -> JobSummary:
     """:func:`run_scenario` once the folder is locked."""
     manifest = check_resume(out, sc, comm) if resume else None
     if manifest is not None:
@@ -75,7 +78,8 @@ def _locked_run(sc: Scenario, out: Path, stop_after: str, comm: MPI.Comm, resume
                          manifest["t_day"])
             return done
     geo = resolve_geometry(sc)  # the one resolution of the scenario's geometry in a run
-    memory = memory_check(sc, geo, comm, force)  # before anything is written or meshed
+    # before anything is written or meshed
+    memory = memory_check(sc, geo, comm, force, memory_mb)
     if comm.rank == 0:
         out.mkdir(parents=True, exist_ok=True)
         write_json_atomic(out / "scenario.json", sc)
@@ -102,7 +106,8 @@ def _run(sc: Scenario, geo: ResolvedGeometry, out: Path, stop_after: str, comm: 
     t_mesh = time.perf_counter()
     md = build_mesh(geo.spec, comm)
     mesh = mesh_outputs(md, geo.spec, out / "mesh", t0=t_mesh)
-    solved = run_coupled(sc, geo, md, out, resume=resume) if stop_after == "solve" else None
+    solved = run_coupled(sc, geo, md, out, resume=resume,
+                         budget_mb=memory["budget_mb_per_rank"]) if stop_after == "solve" else None
     summary: JobSummary = {
         "scenario": sc.name,
         "status": "complete",

@@ -20,7 +20,14 @@ The estimate (docs/benchmarks.md, "Memory estimate before meshing"):
 
 Available memory: ``MemAvailable`` of ``/proc/meminfo`` (the kernel's estimate of what can be
 allocated without swapping), divided by the run's ranks on this node; the smallest value over
-the nodes decides (every rank decides alike).
+the nodes decides (every rank decides alike). A memory limit given to the run (``pilegroup run
+--memory``, per node) lowers it.
+
+Out of core when memory is short: a run whose preset is ``auto`` and resolves to the kept LU
+(``direct_reuse``) turns to the same LU with its factors out of core (``direct_reuse_ooc``:
+slower, a third less memory; docs/benchmarks.md, "Out of core when memory is short") when the
+in-core estimate exceeds the memory per rank (:func:`preset_within`). The run decides before
+meshing with the estimated unknowns, and again once the mesh gives the counted ones.
 """
 
 from __future__ import annotations
@@ -62,10 +69,16 @@ MEASURED_PEAKS: dict[str, tuple[tuple[int, float], ...]] = {
     "lu": ((80_853, 1390.0), (164_679, 2473.0), (274_180, 7000.0), (426_116, 9800.0)),
     "lu_single": ((80_853, 1143.0), (301_772, 4034.0), (426_116, 4828.0), (623_988, 7351.0)),
     "split": ((80_853, 1200.0), (301_772, 4100.0), (426_116, 6600.0)),
+    # the kept LU out of core (direct_reuse_ooc): full pier 1 m, 0.3 m and 0.1 m, "Out of core
+    # when memory is short"
+    "lu_single_ooc": ((301_772, 3153.0), (426_116, 3686.0)),
 }
 #: The family of each preset (``direct`` factors every matrix: the double LU's family).
 FAMILY = {"direct": "lu", "direct_reuse": "lu_single", "direct_reuse_double": "lu",
-          "fieldsplit_pier": "split", "fieldsplit_kept": "split", "fieldsplit_gamg": "split"}
+          "fieldsplit_pier": "split", "fieldsplit_kept": "split", "fieldsplit_gamg": "split",
+          "direct_reuse_ooc": "lu_single_ooc"}
+#: The out-of-core variant of a preset, for memory budgets its in-core factors exceed.
+OUT_OF_CORE = {"direct_reuse": "direct_reuse_ooc"}
 
 
 def _fit(points: tuple[tuple[int, float], ...], ranks: int = 2) -> tuple[float, float]:
@@ -92,15 +105,31 @@ def estimated_peak_mb(unknowns: float, preset: str, ranks: int) -> float:
     return BASE_MB + c * unknowns ** alpha / ranks
 
 
-def run_estimate(sc: Scenario, geo: ResolvedGeometry, ranks: int
-                 ) -> tuple[float, float, str, float]:
+def preset_within(sc: Scenario, preset: str, unknowns: float, ranks: int,
+                  budget_mb: float | None) -> str:
+    """``preset``, or its out-of-core variant where ``auto`` chose it and it exceeds the budget.
+
+    ``budget_mb``: memory per rank (``None``: no limit). A preset the scenario names itself is
+    kept (the memory check then reports what does not fit).
+    """
+    ooc = OUT_OF_CORE.get(preset)
+    if (ooc is None or budget_mb is None or sc.numerics.solver.preset != "auto"
+            or estimated_peak_mb(unknowns, preset, ranks) <= budget_mb):
+        return preset
+    return ooc
+
+
+def run_estimate(sc: Scenario, geo: ResolvedGeometry, ranks: int,
+                 budget_mb: float | None = None) -> tuple[float, float, str, float]:
     """``(cells, unknowns, preset, peak MB per rank)`` of a run of ``sc`` on ``ranks`` ranks.
 
     Before meshing: the central cell and unknown estimates of the model ``geo`` holds, the
-    preset the run will use (``auto`` resolved by its table) and that preset family's fit.
+    preset the run will use (``auto`` resolved by its table and, with a memory budget per rank
+    ``budget_mb``, by :func:`preset_within`) and that preset family's fit.
     """
     cells, unknowns = estimated_unknowns(sc, geo)
     preset = scenario_preset(sc, geo.symmetry, int(unknowns))
+    preset = preset_within(sc, preset, unknowns, ranks, budget_mb)
     return cells, unknowns, preset, estimated_peak_mb(unknowns, preset, ranks)
 
 
@@ -123,25 +152,32 @@ def available_mb() -> float:
     return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_AVPHYS_PAGES") / 2 ** 20
 
 
-def memory_check(sc: Scenario, geo: ResolvedGeometry, comm: MPI.Comm, force: bool = False
-                 ) -> dict[str, Any]:
+def memory_check(sc: Scenario, geo: ResolvedGeometry, comm: MPI.Comm, force: bool = False,
+                 limit_mb: float | None = None) -> dict[str, Any]:
     """Estimate, log and check the run's memory; returns the record for ``summary.json``.
 
+    ``limit_mb``: the memory the run may use per node (``pilegroup run --memory``); the
+    memory per rank is the smaller of its share and the available memory's
+    (``budget_mb_per_rank`` of the record).
+
     Raises:
-        MachineTooSmall: the estimate per rank exceeds the memory available per rank (not
-            with ``force``, which logs a warning instead). Every rank raises alike.
+        MachineTooSmall: the estimate per rank exceeds the memory per rank (not with
+            ``force``, which logs a warning instead). Every rank raises alike.
     """
-    cells, unknowns, preset, need = run_estimate(sc, geo, comm.size)
     avail, local = available_mb_per_rank(comm)
+    budget = avail if limit_mb is None else min(avail, limit_mb / local)
+    cells, unknowns, preset, need = run_estimate(sc, geo, comm.size, budget)
     record = {"estimate_mb_per_rank": round(need, 1), "available_mb_per_rank": round(avail, 1),
+              "budget_mb_per_rank": round(budget, 1), "limit_mb": limit_mb,
               "estimated_cells": round(cells), "estimated_unknowns": round(unknowns),
               "preset": preset, "ranks": comm.size, "ranks_on_node": local, "forced": force}
+    limit = "" if limit_mb is None else f"; --memory {limit_mb:.0f} MB per node"
     text = (f"{need:.0f} MB per rank estimated (about {cells:.3g} cells, {unknowns:.3g} "
             f"unknowns, preset {preset}, {comm.size} rank(s)); {avail:.0f} MB available per"
-            f" rank ({local} rank(s) on this node)")
+            f" rank ({local} rank(s) on this node){limit}")
     if comm.rank == 0:
         log.info("memory: %s", text)
-    if need > avail:
+    if need > budget:
         if not force:
             raise MachineTooSmall("memory", f"{need:.0f} MB per rank",
                                   f"the run does not fit: {text}; coarsen numerics.mesh, use"
@@ -151,5 +187,6 @@ def memory_check(sc: Scenario, geo: ResolvedGeometry, comm: MPI.Comm, force: boo
     return record
 
 
-__all__ = ["BASE_MB", "FITS", "MEASURED_PEAKS", "available_mb", "available_mb_per_rank",
-           "estimated_peak_mb", "estimated_unknowns", "memory_check"]
+__all__ = ["BASE_MB", "FITS", "MEASURED_PEAKS", "OUT_OF_CORE", "available_mb",
+           "available_mb_per_rank", "estimated_peak_mb", "estimated_unknowns", "memory_check",
+           "preset_within"]

@@ -158,3 +158,4 @@ def test_split_lu_blocks_are_single_precision(monkeypatch):
     opts = linsolve.merged_options("fieldsplit_kept")
     assert opts["fieldsplit_p_pc_precision"] == opts["fieldsplit_structure_pc_precision"] \
         == "double"
+

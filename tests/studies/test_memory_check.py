@@ -71,3 +71,75 @@ def test_force_lets_the_run_go_on(small_pile):
     assert estimated_peak_mb(80_853, "direct_reuse_double", 2) == pytest.approx(1390.0, rel=0.1)
     assert estimated_peak_mb(80_853, "direct_reuse", 2) == pytest.approx(1143.0, rel=0.1)
     assert estimated_peak_mb(426_116, "fieldsplit_pier", 2) == pytest.approx(6600.0, rel=0.1)
+
+
+def test_auto_turns_out_of_core_when_the_budget_is_short():
+    """``auto`` resolved to the kept LU turns to its out-of-core variant when the in-core
+    estimate exceeds the memory per rank; a preset named in the scenario is kept."""
+    import dataclasses
+
+    from pilegroup.model import load_scenario
+    from pilegroup.studies.run.memory_check import estimated_peak_mb, preset_within
+
+    sc = load_scenario("pier667")
+    assert sc.numerics.solver.preset == "auto"
+    n = 426_116  # the full pier at h = 0.3 m
+    in_core, ooc = (estimated_peak_mb(n, p, 2) for p in ("direct_reuse", "direct_reuse_ooc"))
+    assert ooc < 0.85 * in_core  # the measured peaks the fits come from
+    assert preset_within(sc, "direct_reuse", n, 2, 4000.0) == "direct_reuse_ooc"
+    assert preset_within(sc, "direct_reuse", n, 2, in_core + 1.0) == "direct_reuse"
+    assert preset_within(sc, "direct_reuse", n, 2, None) == "direct_reuse"
+    assert preset_within(sc, "fieldsplit_pier", n, 2, 100.0) == "fieldsplit_pier"
+    named = dataclasses.replace(sc, numerics=dataclasses.replace(sc.numerics, solver=(
+        dataclasses.replace(sc.numerics.solver, preset="direct_reuse"))))
+    assert preset_within(named, "direct_reuse", n, 2, 4000.0) == "direct_reuse"
+
+
+def test_memory_limit_lowers_the_budget_and_chooses_the_preset():
+    from mpi4py import MPI
+
+    from pilegroup.geometry.adapter import resolve_geometry
+    from pilegroup.model import load_scenario
+    from pilegroup.model.loader import parse_override
+    from pilegroup.studies.run.memory_check import memory_check
+
+    sc = load_scenario("pier667", dict(parse_override(kv) for kv in (
+        'numerics.symmetry="none"', "numerics.mesh.size_m=0.3")))
+    geo = resolve_geometry(sc)
+    free = memory_check(sc, geo, MPI.COMM_WORLD)
+    assert free["budget_mb_per_rank"] == free["available_mb_per_rank"]
+    need = free["estimate_mb_per_rank"]
+    ranks = free["ranks_on_node"]
+    rec = memory_check(sc, geo, MPI.COMM_WORLD, limit_mb=0.9 * need * ranks)
+    assert rec["budget_mb_per_rank"] == pytest.approx(0.9 * need)
+    assert rec["preset"] == "direct_reuse_ooc" and rec["estimate_mb_per_rank"] < 0.9 * need
+
+
+@pytest.mark.parametrize("text, mb", [("8GB", 8192.0), ("6000mb", 6000.0), ("0.5 GB", 512.0)])
+def test_memory_option_reads_a_size_with_its_unit(text, mb):
+    from pilegroup.studies.cli.commands import memory_size
+
+    assert memory_size(text) == mb
+
+
+@pytest.mark.parametrize("text", ["8", "8TB", "-1GB", "0MB", "nanGB", "infGB", "GB"])
+def test_memory_option_refuses_what_is_not_a_size(text):
+    import argparse
+
+    from pilegroup.studies.cli.commands import memory_size
+
+    with pytest.raises(argparse.ArgumentTypeError, match="allowed: a positive size"):
+        memory_size(text)
+
+
+def test_a_memory_limit_too_small_stops_the_run_with_the_limit_named(tmp_path):
+    """``--memory`` below any estimate: exit 2 before meshing, one line naming the limit; a
+    value without a unit is refused by the command line (exit 2, the allowed form)."""
+    run = [str(BIN / "pilegroup"), "run", "pier667", "--out", str(tmp_path / "r")]
+    r = subprocess.run([*run, "--memory", "100MB"], capture_output=True, text=True, timeout=300)
+    lines = [ln for ln in r.stderr.splitlines() if ln.startswith("pilegroup:")]
+    assert r.returncode == 2 and len(lines) == 1, r.stderr[-2000:]
+    assert "--memory 100 MB per node" in lines[0] and "Traceback" not in r.stderr
+    assert not (tmp_path / "r" / "mesh").exists()
+    r = subprocess.run([*run, "--memory", "8"], capture_output=True, text=True, timeout=300)
+    assert r.returncode == 2 and "allowed: a positive size with its unit" in r.stderr
