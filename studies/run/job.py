@@ -21,8 +21,8 @@ from pilegroup.studies.report.run_report import write_report
 from pilegroup.studies.results.records import JobSummary, write_job_summary
 from pilegroup.studies.run.checkpoint import check_resume, completed_summary, remove_checkpoint
 from pilegroup.studies.run.folder_lock import folder_lock
-from pilegroup.studies.run.memory_check import memory_check
-from pilegroup.studies.run.pipeline import run_coupled
+from pilegroup.studies.run.memory_check import memory_check, memory_on_mesh
+from pilegroup.studies.run.pipeline import estimate_dofs, run_coupled
 
 log = logging.getLogger(__name__)
 
@@ -106,8 +106,10 @@ def _run(sc: Scenario, geo: ResolvedGeometry, out: Path, stop_after: str, comm: 
     t_mesh = time.perf_counter()
     md = build_mesh(geo.spec, comm)
     mesh = mesh_outputs(md, geo.spec, out / "mesh", t0=t_mesh)
-    solved = run_coupled(sc, geo, md, out, resume=resume,
-                         budget_mb=memory["budget_mb_per_rank"]) if stop_after == "solve" else None
+    solved = None
+    if stop_after == "solve":
+        memory = memory_on_mesh(sc, geo, estimate_dofs(md, sc.numerics.element), comm, memory)
+        solved = run_coupled(sc, geo, md, out, preset=memory["preset"], resume=resume)
     summary: JobSummary = {
         "scenario": sc.name,
         "status": "complete",

@@ -69,9 +69,9 @@ MEASURED_PEAKS: dict[str, tuple[tuple[int, float], ...]] = {
     "lu": ((80_853, 1390.0), (164_679, 2473.0), (274_180, 7000.0), (426_116, 9800.0)),
     "lu_single": ((80_853, 1143.0), (301_772, 4034.0), (426_116, 4828.0), (623_988, 7351.0)),
     "split": ((80_853, 1200.0), (301_772, 4100.0), (426_116, 6600.0)),
-    # the kept LU out of core (direct_reuse_ooc): full pier 1 m, 0.3 m and 0.1 m, "Out of core
-    # when memory is short"
-    "lu_single_ooc": ((301_772, 3153.0), (426_116, 3686.0)),
+    # the kept LU out of core (direct_reuse_ooc): quarter pier 1 m, full pier 1 m, 0.3 m and
+    # 0.1 m ("Out of core when memory is short")
+    "lu_single_ooc": ((80_853, 970.0), (301_772, 3153.0), (426_116, 3686.0), (623_988, 4309.0)),
 }
 #: The family of each preset (``direct`` factors every matrix: the double LU's family).
 FAMILY = {"direct": "lu", "direct_reuse": "lu_single", "direct_reuse_double": "lu",
@@ -187,6 +187,23 @@ def memory_check(sc: Scenario, geo: ResolvedGeometry, comm: MPI.Comm, force: boo
     return record
 
 
+def memory_on_mesh(sc: Scenario, geo: ResolvedGeometry, unknowns: int, comm: MPI.Comm,
+                   record: dict[str, Any]) -> dict[str, Any]:
+    """The memory record with the preset and estimate for the ``unknowns`` counted on the mesh.
+
+    Before meshing the unknowns are an estimate; ``auto`` is resolved again with the counted
+    ones and the record's budget (:func:`preset_within`), with one line when the preset changes.
+    """
+    preset = scenario_preset(sc, geo.symmetry, unknowns)
+    preset = preset_within(sc, preset, unknowns, comm.size, record["budget_mb_per_rank"])
+    need = estimated_peak_mb(unknowns, preset, comm.size)
+    if preset != record["preset"] and comm.rank == 0:
+        log.info("memory: %d unknowns on the mesh: preset %s, %.0f MB per rank estimated (%.0f "
+                 "MB per rank allowed)", unknowns, preset, need, record["budget_mb_per_rank"])
+    return record | {"preset": preset, "counted_unknowns": unknowns,
+                     "estimate_on_mesh_mb_per_rank": round(need, 1)}
+
+
 __all__ = ["BASE_MB", "FITS", "MEASURED_PEAKS", "OUT_OF_CORE", "available_mb",
            "available_mb_per_rank", "estimated_peak_mb", "estimated_unknowns", "memory_check",
-           "preset_within"]
+           "memory_on_mesh", "preset_within"]

@@ -67,7 +67,6 @@ from pilegroup.studies.run.capacity_probe import CapacityProbe
 from pilegroup.studies.run.checkpoint import Checkpoints
 from pilegroup.studies.run.gauge_probe import GaugeProbe
 from pilegroup.studies.run.ground_probe import GroundProbe
-from pilegroup.studies.run.memory_check import estimated_peak_mb, preset_within
 from pilegroup.studies.run.pile_probe import LoadSettlementCurve, PileProbe, SettlementSeries
 from pilegroup.studies.run.section_probe import CapMotion, PileSections
 from pilegroup.studies.run.stiffness import cap_stiffness, write_cap_stiffness
@@ -111,14 +110,11 @@ def soil_law(sc: Scenario, j: int) -> LinearElastic | MohrCoulomb | DruckerPrage
     return cls(lay.E, lay.nu, lay.c_kPa, lay.phi_deg, lay.psi_deg)
 
 
-def build_problem(sc: Scenario, geo: ResolvedGeometry, md: MeshData, preset: str | None = None,
-                  budget_mb: float | None = None) -> BiotProblem:
+def build_problem(sc: Scenario, geo: ResolvedGeometry, md: MeshData, preset: str | None = None
+                  ) -> BiotProblem:
     """The :class:`~pilegroup.solver.problem.BiotProblem` of scenario ``sc`` on mesh ``md``.
 
-    ``geo`` is the scenario's resolved geometry (the part of the model ``md`` holds);
-    ``budget_mb``: the memory per rank the run may use (``auto`` then turns to an out-of-core
-    preset when the in-core one does not fit: :func:`~pilegroup.studies.run.memory_check.
-    preset_within`, with the unknowns counted on the mesh).
+    ``geo`` is the scenario's resolved geometry (the part of the model ``md`` holds).
     """
     if sc.site.water_table_depth_m != 0.0:
         raise ScenarioError("site.water_table_depth_m", sc.site.water_table_depth_m,
@@ -143,14 +139,7 @@ def build_problem(sc: Scenario, geo: ResolvedGeometry, md: MeshData, preset: str
     loads = [SurfaceLoad(f, sc.total_cap_load() / full_load_area(sc, geo, md))
              for f in names] + surcharge_loads(sc) + face_actions(sc, geo, md)
     disc = Discretisation(sc.numerics.element)
-    dofs = estimate_dofs(md, sc.numerics.element)
-    p = scenario_preset(sc, geo.symmetry, dofs, preset)
-    within = preset_within(sc, p, dofs, md.mesh.comm.size, budget_mb) if preset is None else p
-    if within != p and md.mesh.comm.rank == 0:
-        log.info("memory: %d unknowns need about %.0f MB per rank with %s, more than the %.0f "
-                 "MB per rank allowed: preset %s", dofs, estimated_peak_mb(
-                     dofs, p, md.mesh.comm.size), p, budget_mb, within)
-    p = within
+    p = scenario_preset(sc, geo.symmetry, estimate_dofs(md, sc.numerics.element), preset)
     num = sc.numerics
     newton = NewtonOptions(rtol=num.newton_rtol, atol=num.newton_atol, max_it=num.time.max_newton,
                            krylov_forcing=num.solver.krylov_forcing)
@@ -385,8 +374,8 @@ def _write_stiffness(sc: Scenario, pb: BiotProblem, motion: CapMotion,
 
 
 def run_coupled(sc: Scenario, geo: ResolvedGeometry, md: MeshData, out: Path,
-                preset: str | None = None, resume: dict[str, Any] | None = None,
-                budget_mb: float | None = None) -> RunSummary:
+                preset: str | None = None, resume: dict[str, Any] | None = None
+                ) -> RunSummary:
     """Run every stage of ``sc`` on ``md`` (``geo``'s mesh) with its exports; the summary.
 
     Exports, written at every output time: ``settlement.csv``, the pile tables
@@ -400,12 +389,11 @@ def run_coupled(sc: Scenario, geo: ResolvedGeometry, md: MeshData, out: Path,
     ``outputs.checkpoint_every_min`` and on a stop request (which ends the run with
     :class:`~pilegroup.errors.RunInterrupted`). ``resume``: the manifest of the checkpoint to
     continue from (:func:`~pilegroup.studies.run.checkpoint.check_resume`). With
-    ``outputs.cap_stiffness``, ``cap_stiffness.csv`` at the end. ``budget_mb``: memory per
-    rank (:func:`build_problem`). The linear solver is closed at the end, whatever the end
-    (an out-of-core preset's factor files are removed).
+    ``outputs.cap_stiffness``, ``cap_stiffness.csv`` at the end. The linear solver is closed
+    at the end, whatever the end (an out-of-core preset's factor files are removed).
     """
     t0 = time.perf_counter()
-    pb = build_problem(sc, geo, md, preset, budget_mb)
+    pb = build_problem(sc, geo, md, preset)
     try:
         return _run_problem(sc, geo, md, out, pb, resume, t0)
     finally:

@@ -20,8 +20,11 @@ sys.stderr.write(r.stderr[-3000:])
 print(r.returncode, resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024.0)
 """
 
-#: Pier 667 whole, with 1 m elements out to the block's sides: ~150 GB per rank estimated.
-TOO_LARGE = ("numerics.mesh.far_field_size_m=1.0", 'numerics.symmetry="none"')
+#: Pier 667 whole, with 1 m elements out to the block's sides: ~150 GB per rank estimated with
+#: the in-core kept LU, named so that ``auto`` cannot turn out of core (whose fit, made on
+#: models 20 times smaller, would extrapolate that far below it).
+TOO_LARGE = ("numerics.mesh.far_field_size_m=1.0", 'numerics.symmetry="none"',
+             'numerics.solver.preset="direct_reuse"')
 
 
 def test_estimate_within_a_factor_two_of_the_measured_peak(tmp_path, small_pile):
@@ -143,3 +146,25 @@ def test_a_memory_limit_too_small_stops_the_run_with_the_limit_named(tmp_path):
     assert not (tmp_path / "r" / "mesh").exists()
     r = subprocess.run([*run, "--memory", "8"], capture_output=True, text=True, timeout=300)
     assert r.returncode == 2 and "allowed: a positive size with its unit" in r.stderr
+
+
+def test_the_unknowns_counted_on_the_mesh_decide_again():
+    """Before meshing the unknowns are estimated (the full pier at 0.3 m: 3.2e5 against
+    426,116 counted); ``auto`` is resolved again with the counted ones."""
+    from mpi4py import MPI
+
+    from pilegroup.geometry.adapter import resolve_geometry
+    from pilegroup.model import load_scenario
+    from pilegroup.model.loader import parse_override
+    from pilegroup.studies.run.memory_check import estimated_peak_mb, memory_on_mesh
+
+    sc = load_scenario("pier667", dict(parse_override(kv) for kv in (
+        'numerics.symmetry="none"', "numerics.mesh.size_m=0.3")))
+    geo, comm, n = resolve_geometry(sc), MPI.COMM_WORLD, 426_116
+    in_core = estimated_peak_mb(n, "direct_reuse", comm.size)
+    before = {"preset": "direct_reuse", "budget_mb_per_rank": 0.95 * in_core}
+    rec = memory_on_mesh(sc, geo, n, comm, before)
+    assert rec["preset"] == "direct_reuse_ooc" and rec["counted_unknowns"] == n
+    assert rec["estimate_on_mesh_mb_per_rank"] < 0.95 * in_core
+    rec = memory_on_mesh(sc, geo, n, comm, before | {"budget_mb_per_rank": 1.05 * in_core})
+    assert rec["preset"] == "direct_reuse"
