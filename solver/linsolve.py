@@ -213,7 +213,7 @@ PRESETS["direct_reuse_double"] = dataclasses.replace(
 # the kept LU with its factors out of core, for memory budgets the in-core factors exceed:
 # block low-rank factorisation with the factors written uncompressed (icntl_35 = 3; with the
 # compressed factors, icntl_35 = 2, MUMPS kept 9.1 of the in-core 10.1 GB on the full pier at
-# h = 0.3 m, with 3 it keeps 7.0 GB); solves read the files back (docs/benchmarks.md)
+# h = 0.3 m, with 3 it keeps 6.6-7.0 GB); solves read the files back (docs/benchmarks.md)
 PRESETS["direct_reuse_ooc"] = dataclasses.replace(
     PRESETS["direct_reuse"], name="direct_reuse_ooc", out_of_core=True,
     options={**PRESETS["direct_reuse"].options, "mat_mumps_icntl_22": 1,

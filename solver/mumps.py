@@ -5,7 +5,7 @@
 * :class:`OutOfCoreFolder`: the folder of one rank's out-of-core factor files. With
   ``mat_mumps_icntl_22 = 1`` MUMPS writes the factors to files while it factorises and reads
   them back in every solve, so a rank's resident memory holds only the active fronts (Pier 667,
-  full model, h = 0.3 m: 3.7 GB on the larger rank instead of 5.3 GB; docs/benchmarks.md, "Out
+  full model, h = 0.3 m: 3.4 GB on the larger rank instead of 5.3 GB; docs/benchmarks.md, "Out
   of core when memory is short"). The files of one factorisation take about 4 bytes per entry
   of the factors (5.6 GB there): the folder is made under the temporary directory (``TMPDIR``,
   or ``mat_mumps_ooc_tmpdir`` when the options give one) and removed with everything in it
