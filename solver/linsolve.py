@@ -359,7 +359,7 @@ class KSPSolver:
         self._factor_undrained: bool | None = None  # constraints of the kept factorisation
 
     def close(self) -> None:
-        """Destroy the KSP (MUMPS deletes its files) and remove the out-of-core folder."""
+        """Destroy the KSP (collective) and remove the out-of-core folder."""
         if self.ksp is not None:
             db = PETSc.Options()
             for k in merged_options(self.preset, self._overrides):
@@ -369,6 +369,15 @@ class KSPSolver:
         if self._folder is not None:
             self._folder.remove()
             self._folder = None
+
+    def abandon(self) -> None:
+        """After a failure: empty this rank's out-of-core files (not collective).
+
+        Destroying the KSP is collective and the other ranks may be elsewhere; the files stay
+        (empty) for MUMPS's own clean-up when the KSP goes, the folder until the process ends.
+        """
+        if self._folder is not None:
+            self._folder.empty()
 
     def _preconditioning(self) -> PETSc.Mat | None:
         return self.P if self.spec.fixed_stress else None

@@ -9,13 +9,16 @@
   of core when memory is short"). The files of one factorisation take about 4 bytes per entry
   of the factors (5.6 GB there): the folder is made under the temporary directory (``TMPDIR``,
   or ``mat_mumps_ooc_tmpdir`` when the options give one) and removed with everything in it
-  when the solver is closed, and at interpreter exit if it was not.
+  when the solver is closed, and at interpreter exit if it was not. After a failure the files
+  are emptied at once (:meth:`OutOfCoreFolder.empty`): a failure on one rank ends the job by
+  ``MPI_Abort``, which runs no exit handler, and leaves only the empty folder.
 """
 
 from __future__ import annotations
 
 import functools
 import logging
+import os
 import shutil
 import tempfile
 import weakref
@@ -81,6 +84,11 @@ class OutOfCoreFolder:
                 f"the out-of-core factors can be made there ({exc.strerror}); allowed: a "
                 "writable folder with room for the factors (docs/solver.md)") from None
         self._finalizer = weakref.finalize(self, shutil.rmtree, self.path, ignore_errors=True)
+
+    def empty(self) -> None:
+        """Cut every file in the folder to zero bytes (their space freed, their names kept)."""
+        for f in self.path.iterdir():
+            os.truncate(f, 0)
 
     def remove(self) -> None:
         """Remove the folder and the factor files in it (once; later calls do nothing)."""

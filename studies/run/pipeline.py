@@ -390,14 +390,19 @@ def run_coupled(sc: Scenario, geo: ResolvedGeometry, md: MeshData, out: Path,
     :class:`~pilegroup.errors.RunInterrupted`). ``resume``: the manifest of the checkpoint to
     continue from (:func:`~pilegroup.studies.run.checkpoint.check_resume`). With
     ``outputs.cap_stiffness``, ``cap_stiffness.csv`` at the end. The linear solver is closed
-    at the end, whatever the end (an out-of-core preset's factor files are removed).
+    at the end; after a failure only this rank's out-of-core files are emptied.
     """
     t0 = time.perf_counter()
     pb = build_problem(sc, geo, md, preset)
     try:
-        return _run_problem(sc, geo, md, out, pb, resume, t0)
-    finally:
-        pb.linear_solver.close()
+        data = _run_problem(sc, geo, md, out, pb, resume, t0)
+    except BaseException:
+        # only this rank's out-of-core files: destroying the solver is collective, and after
+        # a failure on one rank the others are elsewhere (the failure then ends every rank)
+        pb.linear_solver.abandon()
+        raise
+    pb.linear_solver.close()
+    return data
 
 
 def _run_problem(sc: Scenario, geo: ResolvedGeometry, md: MeshData, out: Path, pb: BiotProblem,

@@ -59,3 +59,27 @@ def test_out_of_core_folder_that_cannot_be_made_is_named(tmp_path):
 
 def test_out_of_core_under_mpirun(rerun_under_mpirun):
     rerun_under_mpirun(__file__, ranks=2, timeout=300)
+
+
+def test_a_failed_run_empties_its_factor_files_at_once(
+        tmp_path, monkeypatch, small_pile):
+    """After a failure this rank's factor files are emptied at once (``abandon``, not
+    collective); closing the solver afterwards still works and removes the folder."""
+    monkeypatch.setenv("PILEGROUP_MESH_CACHE", str(tmp_path / "cache"))
+    sc = load_scenario(small_pile)
+    md = build_mesh(geometry_spec(sc), MPI.COMM_WORLD)
+    opts = {"mat_mumps_ooc_tmpdir": str(tmp_path)}
+    sc = dataclasses.replace(sc, numerics=dataclasses.replace(sc.numerics, solver=(
+        dataclasses.replace(sc.numerics.solver, options=opts))))
+    pb = pier.build_problem(sc, resolve_geometry(sc), md, "direct_reuse_ooc")
+    pb.set_step(0.5, 0.5)
+    pb.residual_state(0.5)
+    pb.assemble_jacobian()
+    pb.solve_linear(pb.b, pb.dx)
+    (folder,) = tmp_path.glob("pilegroup-ooc-*")
+    assert any(folder.iterdir())  # the factors, on this rank's folder under the option's path
+    pb.linear_solver.abandon()
+    files = list(folder.iterdir())
+    assert files and all(f.stat().st_size == 0 for f in files)
+    pb.linear_solver.close()  # MUMPS removes its (empty) files, then the folder goes
+    assert not folder.exists()
