@@ -210,10 +210,8 @@ PRESETS: dict[str, Preset] = {
 PRESETS["direct_reuse_double"] = dataclasses.replace(
     PRESETS["direct_reuse"], name="direct_reuse_double", fallback=None,
     options={**PRESETS["direct_reuse"].options, "pc_precision": "double"})
-# the kept LU with its factors out of core, for memory budgets the in-core factors exceed:
-# block low-rank factorisation with the factors written uncompressed (icntl_35 = 3; with the
-# compressed factors, icntl_35 = 2, MUMPS kept 9.1 of the in-core 10.1 GB on the full pier at
-# h = 0.3 m, with 3 it keeps 6.6-7.0 GB); solves read the files back (docs/benchmarks.md)
+# the kept LU with its factors written uncompressed to files (icntl_35 = 3; compressed, MUMPS
+# kept them in memory), read back by every solve: docs/solver.md, docs/benchmarks.md
 PRESETS["direct_reuse_ooc"] = dataclasses.replace(
     PRESETS["direct_reuse"], name="direct_reuse_ooc", out_of_core=True,
     options={**PRESETS["direct_reuse"].options, "mat_mumps_icntl_22": 1,
@@ -371,11 +369,8 @@ class KSPSolver:
             self._folder = None
 
     def abandon(self) -> None:
-        """After a failure: empty this rank's out-of-core files (not collective).
-
-        Destroying the KSP is collective and the other ranks may be elsewhere; the files stay
-        (empty) for MUMPS's own clean-up when the KSP goes, the folder until the process ends.
-        """
+        """After a failure: empty this rank's out-of-core files (not collective: the KSP's
+        destruction is, and other ranks may be elsewhere; MUMPS removes the empty files)."""
         if self._folder is not None:
             self._folder.empty()
 
