@@ -369,8 +369,10 @@ class KSPSolver:
             self._folder = None
 
     def abandon(self) -> None:
-        """After a failure: empty this rank's out-of-core files (not collective: the KSP's
-        destruction is, and other ranks may be elsewhere; MUMPS removes the empty files)."""
+        """After a failure: empty this rank's out-of-core files (not collective).
+
+        Destroying the KSP is, and other ranks may be elsewhere; MUMPS removes the empty files.
+        """
         if self._folder is not None:
             self._folder.empty()
 
