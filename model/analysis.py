@@ -347,7 +347,9 @@ class LinearSolver:
     measured fastest for the system's model part, interface and size
     (``studies.run.auto_preset.AUTO_TABLE``, docs/solver.md); a failing ``fieldsplit_gamg``,
     ``fieldsplit_pier`` or ``fieldsplit_kept`` falls back to ``direct_reuse`` (a kept LU in
-    single precision), which falls back to ``direct_reuse_double`` (the same in double).
+    single precision), which falls back to ``direct_reuse_double`` (the same in double);
+    ``direct_reuse_ooc`` is ``direct_reuse`` with its factors out of core (files under
+    ``TMPDIR``), which ``auto`` takes when the in-core one exceeds the memory a run may use.
 
     ``krylov_forcing``: inexact Newton (presets whose Krylov solve supports it, e.g.
     ``direct_reuse``): a Newton correction's Krylov solve stops once every block's linear
@@ -355,8 +357,8 @@ class LinearSolver:
     preset's relative tolerance (docs/solver.md, "Inexact Newton").
     """
 
-    preset: Literal["auto", "direct", "direct_reuse", "direct_reuse_double", "fieldsplit_gamg",
-                    "fieldsplit_pier", "fieldsplit_kept"] = "auto"
+    preset: Literal["auto", "direct", "direct_reuse", "direct_reuse_double", "direct_reuse_ooc",
+                    "fieldsplit_gamg", "fieldsplit_pier", "fieldsplit_kept"] = "auto"
     options: dict[str, str | int | float | bool] = field(default_factory=dict)
     krylov_forcing: float = 0.1
 

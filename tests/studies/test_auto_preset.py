@@ -73,3 +73,13 @@ def test_auto_reaches_the_solver(tmp_path, monkeypatch, small_pile):
     tied = dataclasses.replace(sc, interface=dataclasses.replace(sc.interface, mode="tied"))
     pb = pier.build_problem(tied, geo, build_mesh(geometry_spec(tied), MPI.COMM_WORLD))
     assert pb.linear_solver.preset == "direct"
+
+
+def test_every_preset_can_be_named_in_a_scenario():
+    """``numerics.solver.preset`` accepts ``auto`` and exactly the presets the solver has."""
+    import typing
+
+    from pilegroup.model.analysis import LinearSolver
+
+    named = set(typing.get_args(typing.get_type_hints(LinearSolver)["preset"]))
+    assert named == {"auto", *PRESETS}
