@@ -84,6 +84,29 @@ def small_pile_run(request, tmp_path_factory):
     return base / "run"
 
 
+def _run_preset(sc, md, preset):
+    """Every stage of ``sc`` on mesh ``md`` with linear-solver ``preset``, in this process.
+
+    Returns ``(problem, settlement at the end, run log)``.
+    """
+    from pilegroup.geometry.adapter import resolve_geometry
+    from pilegroup.solver.probes import SettlementProbe
+    from pilegroup.solver.stepping import run_stages
+    from pilegroup.studies.run import pipeline as pier
+
+    pb = pier.build_problem(sc, resolve_geometry(sc), md, preset)
+    probe = SettlementProbe(pb, pier.loaded_facets(sc, md))
+    log = run_stages(pb, pier.solver_stages(sc), pier.time_stepping(sc),
+                     geostatic_tol=pier.GEOSTATIC_TOL_M)
+    return pb, probe(), log
+
+
+@pytest.fixture(scope="session")
+def run_preset():
+    """``run_preset(sc, md, preset)``: a run in this process; ``(problem, settlement, log)``."""
+    return _run_preset
+
+
 @pytest.fixture(scope="session")
 def run_cli():
     """``run_cli(scenario, out, ranks=1, sets=(), ...)``: ``pilegroup run`` under a timeout."""

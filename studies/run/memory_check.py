@@ -128,9 +128,15 @@ def run_estimate(sc: Scenario, geo: ResolvedGeometry, ranks: int,
     ``budget_mb``, by :func:`preset_within`) and that preset family's fit.
     """
     cells, unknowns = estimated_unknowns(sc, geo)
-    preset = scenario_preset(sc, geo.symmetry, int(unknowns))
-    preset = preset_within(sc, preset, unknowns, ranks, budget_mb)
-    return cells, unknowns, preset, estimated_peak_mb(unknowns, preset, ranks)
+    return cells, unknowns, *_preset_and_need(sc, geo, unknowns, ranks, budget_mb)
+
+
+def _preset_and_need(sc: Scenario, geo: ResolvedGeometry, unknowns: float, ranks: int,
+                     budget_mb: float | None) -> tuple[str, float]:
+    """``(preset, peak MB per rank)`` of ``unknowns``: ``auto`` resolved, then budgeted."""
+    preset = preset_within(sc, scenario_preset(sc, geo.symmetry, int(unknowns)), unknowns,
+                           ranks, budget_mb)
+    return preset, estimated_peak_mb(unknowns, preset, ranks)
 
 
 def available_mb_per_rank(comm: MPI.Comm) -> tuple[float, int]:
@@ -194,9 +200,7 @@ def memory_on_mesh(sc: Scenario, geo: ResolvedGeometry, unknowns: int, comm: MPI
     Before meshing the unknowns are an estimate; ``auto`` is resolved again with the counted
     ones and the record's budget (:func:`preset_within`), with one line when the preset changes.
     """
-    preset = scenario_preset(sc, geo.symmetry, unknowns)
-    preset = preset_within(sc, preset, unknowns, comm.size, record["budget_mb_per_rank"])
-    need = estimated_peak_mb(unknowns, preset, comm.size)
+    preset, need = _preset_and_need(sc, geo, unknowns, comm.size, record["budget_mb_per_rank"])
     if preset != record["preset"] and comm.rank == 0:
         log.info("memory: %d unknowns on the mesh: preset %s, %.0f MB per rank estimated (%.0f "
                  "MB per rank allowed)", unknowns, preset, need, record["budget_mb_per_rank"])

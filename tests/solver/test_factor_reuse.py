@@ -16,18 +16,15 @@ from pilegroup.studies.run import pipeline as pier
 
 
 @pytest.mark.parametrize("mode", ["tied", "viscoplastic"])
-def test_direct_reuse_matches_direct(tmp_path, monkeypatch, mode, small_pile):
+def test_direct_reuse_matches_direct(tmp_path, monkeypatch, mode, small_pile, run_preset):
     monkeypatch.setenv("PILEGROUP_MESH_CACHE", str(tmp_path / "cache"))
     sc = load_scenario(small_pile)
     sc = dataclasses.replace(sc, interface=dataclasses.replace(sc.interface, mode=mode))
     md = build_mesh(geometry_spec(sc), MPI.COMM_WORLD)
     out = {}
     for preset in ("direct", "direct_reuse"):
-        pb = pier.build_problem(sc, resolve_geometry(sc), md, preset)
-        probe = SettlementProbe(pb, pier.loaded_facets(sc, md))
-        log = run_stages(pb, pier.solver_stages(sc), pier.time_stepping(sc),
-                         geostatic_tol=pier.GEOSTATIC_TOL_M)
-        out[preset] = (probe(), log.newton_total, pb.refactorisations)
+        pb, w, log = run_preset(sc, md, preset)
+        out[preset] = (w, log.newton_total, pb.refactorisations)
     w_direct, newton_direct, factors_direct = out["direct"]
     w_reuse, newton_reuse, factors = out["direct_reuse"]
     assert w_reuse == pytest.approx(w_direct, rel=1e-8)
@@ -158,4 +155,3 @@ def test_split_lu_blocks_are_single_precision(monkeypatch):
     opts = linsolve.merged_options("fieldsplit_kept")
     assert opts["fieldsplit_p_pc_precision"] == opts["fieldsplit_structure_pc_precision"] \
         == "double"
-

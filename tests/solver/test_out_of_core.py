@@ -10,12 +10,11 @@ from mpi4py import MPI
 from pilegroup.geometry.adapter import geometry_spec, resolve_geometry
 from pilegroup.geometry.convert import build_mesh
 from pilegroup.model import load_scenario
-from pilegroup.solver.probes import SettlementProbe
-from pilegroup.solver.stepping import run_stages
 from pilegroup.studies.run import pipeline as pier
 
 
-def test_out_of_core_factors_give_the_in_core_answer(tmp_path, monkeypatch, small_pile):
+def test_out_of_core_factors_give_the_in_core_answer(tmp_path, monkeypatch, small_pile,
+                                                     run_preset):
     """``direct_reuse_ooc``: MUMPS writes the factors to a folder of the solver's own under
     TMPDIR, the run gives the in-core kept LU's settlement (the same factorisation, read back
     from files), and closing the solver removes the folder with its files."""
@@ -28,13 +27,10 @@ def test_out_of_core_factors_give_the_in_core_answer(tmp_path, monkeypatch, smal
     md = build_mesh(geometry_spec(sc), MPI.COMM_WORLD)
     out = {}
     for preset in ("direct_reuse", "direct_reuse_ooc"):
-        pb = pier.build_problem(sc, resolve_geometry(sc), md, preset)
-        probe = SettlementProbe(pb, pier.loaded_facets(sc, md))
-        log = run_stages(pb, pier.solver_stages(sc), pier.time_stepping(sc),
-                         geostatic_tol=pier.GEOSTATIC_TOL_M)
+        pb, w, log = run_preset(sc, md, preset)
         folders = sorted((tmp_path / "scratch").glob("pilegroup-ooc-*"))
         files = [f for d in folders for f in d.iterdir()]
-        out[preset] = (probe(), log.newton_total, folders, files)
+        out[preset] = (w, log.newton_total, folders, files)
         pb.linear_solver.close()
         assert not any(d.exists() for d in folders)
     assert out["direct_reuse"][2] == []  # in core: no folder
