@@ -4,7 +4,13 @@ Zero-thickness Goodman interface with
 
 * a **normal** penalty spring in compression and no tension: ``sigma_n = k_normal * min(g, 0)``
   where ``g`` is the normal opening measured from the zero-traction position (state ``"gap"``);
-  ``g > 0`` means detached: all three tractions are exactly zero and ``"detached" = 1``;
+  ``g > 0`` means detached: all three tractions are exactly zero and ``"detached" = 1``. With a
+  bearing limit ``q_b`` (``bearing``, for pile bases) the compression is elastic–perfectly
+  plastic: ``sigma_n >= -q_b``, the corner rounded over ``(1 -+ w) q_b`` of the penalty's stress
+  (:func:`bearing_curve`, ``w`` = :data:`BEARING_ROUNDING`); a closure beyond the plateau's start
+  ``-(1 + w) q_b / k_normal`` is permanent penetration, which moves the zero-traction position
+  (``g`` stays there), and an opening from there unloads along the curve (a base spring with the
+  ultimate resistance ``q_b``, as a Q–z curve's plateau);
 * an **elastic shear** law after Clough & Duncan (Eqs. 5–8): with ``p = max(-sigma_n, p_floor)``
   the compressive normal stress magnitude, ``a = 1 / (K r_w (p/P_a)^n)`` and
   ``b = R_f / (p tan(delta))``, the shear traction is ``tau = gamma_e / (a + b |gamma_e|)``
@@ -58,6 +64,30 @@ __all__ = ["PileSoilInterface", "delta_eq17", "dp_outer_cone"]
 
 _TINY = 1e-300
 
+#: Half-width of the rounded corner of the bearing limit, a fraction of ``q_b``.
+BEARING_ROUNDING = 0.05
+
+
+def bearing_curve(x: np.ndarray, w: float = BEARING_ROUNDING) -> tuple[np.ndarray, np.ndarray]:
+    """Compression under a bearing limit, ``q_b h(x)``, and ``h'(x)``; ``x``: the penalty's / q_b.
+
+    ``h(x) = x`` up to ``1 - w``, ``1`` from ``1 + w``, and between them the parabola
+    ``x - (x - 1 + w)^2 / (4 w)``, which meets both with their slopes (continuous derivative:
+    an exact corner made Newton cycle between the elastic and the limit branch of the base
+    points, halving its residual by the line search until it gave up).
+    """
+    lo = 1.0 - w
+    u = np.clip(x - lo, 0.0, 2.0 * w)
+    h = np.where(x <= lo, x, np.where(x >= 1.0 + w, 1.0, lo + u - u * u / (4.0 * w)))
+    return h, 1.0 - u / (2.0 * w)
+
+
+def bearing_curve_inverse(y: np.ndarray, w: float = BEARING_ROUNDING) -> np.ndarray:
+    """The ``x`` of :func:`bearing_curve` with ``h(x) = y`` (``y <= 1``; 1 -> ``1 + w``)."""
+    lo = 1.0 - w
+    v = np.clip(y - lo, 0.0, w)
+    return np.minimum(y, lo) + 2.0 * w - 2.0 * np.sqrt(w * w - w * v)
+
 
 class _Normal(NamedTuple):
     """Normal response of one step, per point (penalty in contact, free when detached)."""
@@ -106,6 +136,8 @@ class PileSoilInterface(DruckerPragerCone):
             function, which uses the actual sigma_n.
         viscous: ``False`` drops the viscoplastic slip (the "elastic" interface: hyperbolic
             shear springs and the normal penalty only; no yield surface, no creep).
+        bearing: bearing limit ``q_b`` of the normal compression, kPa (> 0; ``None``: none):
+            ``sigma_n >= -q_b``, the rest of a closure being permanent penetration.
 
     State (arrays ``(n, k)``): ``traction`` (3, kPa), ``slip_e`` (2, elastic slip, m),
     ``slip_vp`` (2, viscoplastic slip, m), ``gap`` (1, normal opening from the zero-traction
@@ -129,6 +161,7 @@ class PileSoilInterface(DruckerPragerCone):
     integrator: str = "implicit"
     p_floor: float = 1.0
     viscous: bool = True
+    bearing: float | None = None
 
     def __post_init__(self) -> None:
         err = ConstitutiveError
@@ -150,6 +183,8 @@ class PileSoilInterface(DruckerPragerCone):
             require_positive(key, getattr(self, key), unit, error=err)
         require_one_of("variant", self.variant, ("default", "seed"), error=err)
         require_one_of("integrator", self.integrator, ("implicit", "explicit"), error=err)
+        if self.bearing is not None:
+            require_positive("bearing", self.bearing, "kPa", error=err)
 
     # ------------------------------------------------------------------ derived parameters
     @cached_property
@@ -231,7 +266,8 @@ class PileSoilInterface(DruckerPragerCone):
         Args:
             n: number of points.
             traction0: initial ``[sigma_n, tau1, tau2]`` in kPa, ``(3,)`` or ``(n, 3)``;
-                sigma_n <= 0 (the in-situ horizontal effective stress, compression negative);
+                sigma_n <= 0 (the in-situ horizontal effective stress, compression negative;
+                with a bearing limit, a larger compression starts at ``-bearing``);
                 the shear must lie below the hyperbola's asymptote ``p tan(delta) / R_f``.
                 None: all zero.
 
@@ -250,6 +286,10 @@ class PileSoilInterface(DruckerPragerCone):
             raise ConstitutiveError(
                 "traction0 sigma_n must be <= 0 kPa (no tension; compression negative); got max "
                 f"{tr[:, 0].max()!r} kPa")
+        gap = tr[:, 0] / self.k_normal
+        if self.bearing is not None:  # a point beyond the limit starts at it
+            tr[:, 0] = np.maximum(tr[:, 0], -self.bearing)
+            gap = -self.bearing * bearing_curve_inverse(-tr[:, 0] / self.bearing) / self.k_normal
         a, b = self.hyperbola(tr[:, 0])
         t = np.hypot(tr[:, 1], tr[:, 2])
         if np.any(b * t >= 1.0):
@@ -260,7 +300,7 @@ class PileSoilInterface(DruckerPragerCone):
             "traction": tr,
             "slip_e": slip_e,
             "slip_vp": np.zeros((n, 2)),
-            "gap": tr[:, :1] / self.k_normal,
+            "gap": gap[:, None],
             "detached": np.zeros((n, 1)),
         }
 
@@ -297,14 +337,24 @@ class PileSoilInterface(DruckerPragerCone):
         return traction, state, tangent
 
     def _normal(self, gap: np.ndarray) -> _Normal:
-        """Normal penalty response at the opening ``gap`` after the step, with derivatives."""
+        """Normal penalty response at the opening ``gap`` after the step, with derivatives.
+
+        With a bearing limit the compression follows :func:`bearing_curve`; beyond its plateau's
+        start the opening is held there (the rest of the closure is penetration).
+        """
         kn = self.k_normal
+        qb = self.bearing
+        if qb is not None:  # penetration: the opening stays where the plateau starts
+            gap = np.maximum(gap, -(1.0 + BEARING_ROUNDING) * qb / kn)
         contact = gap <= 0.0
         s = np.where(contact, kn * gap, 0.0)
+        s_n = np.where(contact, kn, 0.0)
+        if qb is not None:
+            h, dh = bearing_curve(-s / qb)
+            s, s_n = -qb * h, s_n * dh
         a, b = self.hyperbola(s)
         p = np.maximum(-s, self.p_floor)
-        s_n = np.where(contact, kn, 0.0)
-        p_n = np.where(contact & (-s > self.p_floor), -kn, 0.0)
+        p_n = np.where(contact & (-s > self.p_floor), -s_n, 0.0)
         return _Normal(gap, contact, s, a, b, p, s_n, p_n)
 
     def _trial_slip(

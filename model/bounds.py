@@ -68,6 +68,9 @@ BOUNDS: dict[str, Bound] = {
     "layers.interface.n": Bound(0.0, 2.0, "-", "Clough-Duncan exponents ~0.2-1 (paper: 0.28-0.52)"),
     "layers.interface.eta_MPa_day": Bound(1.0e-3, 1.0e6, "MPa·day/m",
                                           "paper Table 1: 6-53; four decades either side"),
+    "layers.interface.base_bearing_kPa": Bound(1.0, 1.0e5, "kPa",
+                                               "9 c_u of very soft clay (~50 kPa) to the end"
+                                               " bearing of piles on rock (~20 MPa)"),
     "piles.diameter_m": _PILE_D,
     "piles.length_in_soil_m": _PILE_L,
     "piles.layout.diameter_m": _PILE_D,

@@ -264,6 +264,33 @@ class Scenario:
                 raise ScenarioError(f"layers[{i}].interface", None,
                                     f"missing: the piles cross layer {layer.name!r} and"
                                     f" interface.mode = {self.interface.mode!r}")
+        self._check_base_bearing()
+
+    def _check_base_bearing(self) -> None:
+        """A base bearing limit exceeds the in-situ vertical effective stress at the toes.
+
+        The limit is the base's largest (gross) effective compression; the in-situ stress
+        (hydrostatic pore pressure, the layers' initial excess pore pressure aside) is what the
+        base carries before any load. A smaller limit would fail the base under the pile's own
+        weight.
+        """
+        for n, length in enumerate(self.piles.lengths, start=1):
+            sv, j = 0.0, 0
+            for j, layer in enumerate(self.layers):
+                bottom = self.layer_bottom(j)
+                sv += (layer.gamma_kN_per_m3 - GAMMA_WATER) * (min(bottom, length)
+                                                               - self.layer_top(j))
+                if bottom >= length:
+                    break
+            ip = self.layers[j].interface
+            if ip is not None and ip.base_bearing_kPa is not None \
+                    and ip.base_bearing_kPa <= sv:
+                raise ScenarioError(f"layers[{j}].interface.base_bearing_kPa",
+                                    ip.base_bearing_kPa,
+                                    f"must exceed the in-situ vertical effective stress at the"
+                                    f" toe of pile {n} ({sv:.4g} kPa at {length:g} m): the limit"
+                                    " is the gross bearing pressure, e.g. N_c c_u + sigma'_v0",
+                                    "kPa")
 
     def _check_gauges(self) -> None:
         """Gauge sections lie on the piles: on every pile, so above the shortest one's toe."""

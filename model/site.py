@@ -60,7 +60,10 @@ class InterfaceParams:
     """Pile-soil interface parameters of one soil layer (paper Table 1, Eqs. 5-17).
 
     ``eta_MPa_day`` is read as MPa·day per metre of slip (docs/model.md, item 3), so that
-    the slip rate of the zero-thickness interface is in m/day.
+    the slip rate of the zero-thickness interface is in m/day. ``base_bearing_kPa``: the
+    ultimate base resistance of a pile whose toe stands in this layer (the largest compressive
+    normal stress of its base interface, kPa; docs/model.md, "Capacity"); absent: the soil below
+    the toe alone limits it.
     """
 
     K: float
@@ -68,6 +71,7 @@ class InterfaceParams:
     R_f: float
     eta_MPa_day: float
     delta_deg: float | None = None
+    base_bearing_kPa: float | None = None
 
     def __post_init__(self) -> None:
         require_positive("K", self.K, "-")
@@ -79,6 +83,9 @@ class InterfaceParams:
         check_bound("layers.interface.eta_MPa_day", self.eta_MPa_day)
         if self.delta_deg is not None:
             _require_friction_angle("delta_deg", self.delta_deg)
+        if self.base_bearing_kPa is not None:
+            require_positive("base_bearing_kPa", self.base_bearing_kPa, "kPa")
+            check_bound("layers.interface.base_bearing_kPa", self.base_bearing_kPa)
 
     @property
     def eta(self) -> float:

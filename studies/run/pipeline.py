@@ -221,11 +221,13 @@ def full_load_area(sc: Scenario, geo: ResolvedGeometry, md: MeshData) -> float:
     return facet_area(md, loaded_facets(sc, md)) / geo.kept_fraction
 
 
-def interface_law(sc: Scenario, j: int, mesh_size: float) -> PileSoilInterface | None:
+def interface_law(sc: Scenario, j: int, mesh_size: float, base: bool = False
+                  ) -> PileSoilInterface | None:
     """The pile-soil interface law of soil layer ``j`` (Table 1 parameters of that layer).
 
     ``k_normal = normal_stiffness_factor * E_layer / h`` with ``h`` the element size at the
-    pile surfaces; ``interface.mode = "elastic"`` drops the viscoplastic slip.
+    pile surfaces; ``interface.mode = "elastic"`` drops the viscoplastic slip. ``base``: the law
+    of the pile bases in the layer, with the layer's ``base_bearing_kPa`` as bearing limit.
     """
     lay = sc.layers[j]
     ip = lay.interface
@@ -236,7 +238,7 @@ def interface_law(sc: Scenario, j: int, mesh_size: float) -> PileSoilInterface |
         K=ip.K, n=ip.n, R_f=ip.R_f, c=lay.c_kPa, phi_deg=lay.phi_deg, eta=ip.eta,
         k_normal=opt.normal_stiffness_factor * lay.E / mesh_size, delta_deg=ip.delta_deg,
         N=opt.N, variant=opt.variant, integrator=opt.integrator,
-        viscous=opt.mode == "viscoplastic")
+        viscous=opt.mode == "viscoplastic", bearing=ip.base_bearing_kPa if base else None)
 
 
 def interface_coupling(sc: Scenario, mesh_size: float) -> InterfaceCoupling | None:
@@ -249,8 +251,10 @@ def interface_coupling(sc: Scenario, mesh_size: float) -> InterfaceCoupling | No
     if not sc.interface.base:
         raise ScenarioError("interface.base", False, "only true (a pile base interface) is "
                             "supported with interface.mode = elastic/viscoplastic", "-")
-    laws = tuple(interface_law(sc, j, mesh_size) for j in range(len(sc.layers)))
-    return InterfaceCoupling(laws + laws, quadrature=sc.interface.quadrature)
+    layers = range(len(sc.layers))
+    laws = tuple(interface_law(sc, j, mesh_size) for j in layers) \
+        + tuple(interface_law(sc, j, mesh_size, base=True) for j in layers)
+    return InterfaceCoupling(laws, quadrature=sc.interface.quadrature)
 
 
 def estimate_dofs(md: MeshData, element: str) -> int:

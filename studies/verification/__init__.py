@@ -16,6 +16,8 @@ the tolerance and the source of the reference. Modules:
   pipeline);
 * ``lateral_cases``: ``lateral-single-pile``, ``cap-equilibrium``, ``rigid-cap-moment`` (cap
   actions, the whole run pipeline);
+* ``capacity_cases``: ``pile-capacity`` (a capacity stage, shaft plus toe, the whole run
+  pipeline);
 * ``runner``: :func:`run_cases` and :func:`main`
   (``python -m pilegroup.studies.verification [CASE ...] [--size fast|bench] [--json]``,
   also under ``mpirun -n 2``; ``pilegroup verify``).
@@ -32,6 +34,7 @@ from pilegroup.studies.verification import (  # noqa: F401
     downdrag_cases,
     radial_cases,
     lateral_cases,
+    capacity_cases,
 )
 # isort: on
 

@@ -9,6 +9,7 @@ of the shaft tractions.
 
 from __future__ import annotations
 
+import json
 import os
 import shutil
 import tempfile
@@ -210,11 +211,12 @@ def shaft_profile_oscillation(itf: NodalInterface, comm: MPI.Comm) -> dict[str, 
 
 
 def run_pipeline(doc: dict[str, Any], comm: MPI.Comm, names: Sequence[str]
-                 ) -> tuple[dict[str, Table], dict[str, int]]:
+                 ) -> tuple[dict[str, Table], dict[str, Any]]:
     """Run a scenario (TOML document as a dict) as ``pilegroup run`` does, in a temporary folder.
 
     Returns the contract tables ``names`` it wrote and its counts (``dofs``, ``newton``,
-    ``steps``), on every rank; the folder is removed after.
+    ``steps``) with the solver's summary (``summary``) and the mesh's (``mesh``,
+    ``mesh/mesh_summary.json``), on every rank; the folder is removed after.
     """
     sc = scenario_from_dict(doc)
     tmp = tempfile.mkdtemp(prefix="pilegroup-case-") if comm.rank == 0 else None
@@ -228,10 +230,12 @@ def run_pipeline(doc: dict[str, Any], comm: MPI.Comm, names: Sequence[str]
             del os.environ["PILEGROUP_PROGRESS"]
         else:
             os.environ["PILEGROUP_PROGRESS"] = progress
-    tables = None
+    tables = mesh = None
     if comm.rank == 0:
         tables = {name: read_csv(out / name) for name in names}
+        mesh = json.loads((out / "mesh" / "mesh_summary.json").read_text(encoding="utf-8"))
         shutil.rmtree(out, ignore_errors=True)
     counts = {"dofs": summary.get("dofs", 0), "newton": summary.get("newton_iterations", 0),
-              "steps": summary.get("steps", 0)}
+              "steps": summary.get("steps", 0), "summary": summary,
+              "mesh": comm.bcast(mesh, root=0)}
     return comm.bcast(tables, root=0), counts

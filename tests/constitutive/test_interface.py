@@ -16,7 +16,12 @@ import math
 import numpy as np
 import pytest
 
-from pilegroup.constitutive.interface_law import PileSoilInterface
+from pilegroup.constitutive.interface_law import (
+    BEARING_ROUNDING,
+    PileSoilInterface,
+    bearing_curve,
+    bearing_curve_inverse,
+)
 from pilegroup.constitutive.paper import TABLE1, delta_eq17, dp_outer_cone, interface_kwargs
 from pilegroup.errors import ConstitutiveError
 
@@ -377,3 +382,97 @@ def test_seed_creeps_at_zero_shear_default_does_not():
         st = law.initial_state(1, np.array([SIG_N, 1.0, 0.0]))
         tr, _, _ = law.update(np.zeros((1, 3)), st, 100.0)
         assert (tr[0, 1] < 0.5) == relaxed
+
+
+@pytest.mark.parametrize("integrator", ["implicit", "explicit"])
+def test_bearing_limit_elastic_perfectly_plastic(integrator):
+    """With ``bearing = q_b`` the normal response is elastic–perfectly plastic in compression.
+
+    Closed form (one point, no shear; ``w`` = BEARING_ROUNDING, ``g_l = q_b / k_n``): loading to
+    a closure ``g`` gives ``k_n g`` up to ``(1 - w) q_b``, ``q_b`` from ``(1 + w) g_l`` on (the
+    corner between them a parabola); the closure beyond ``(1 + w) g_l`` is permanent, so
+    unloading by ``du`` gives ``-((1 + w) g_l - du) k_n`` below the corner and the contact
+    opens after ``(1 + w) g_l``.
+    """
+    qb, w = 180.0, BEARING_ROUNDING
+    law = law2(integrator=integrator, bearing=qb)
+    kn = law.k_normal
+    g_l = qb / kn
+    st = law.initial_state(1, np.array([-50.0, 0.0, 0.0]))
+    tr, st, tang = law.update(np.array([[-(g_l - 50.0 / kn) / 2, 0.0, 0.0]]), st, 1.0)
+    np.testing.assert_allclose(tr[0, 0], -(50.0 + qb) / 2, rtol=1e-12)  # elastic
+    assert tang[0, 0, 0] == kn
+    tr, st, tang = law.update(np.array([[-5.0 * g_l, 0.0, 0.0]]), st, 1.0)  # far beyond
+    assert tr[0, 0] == -qb and tang[0, 0, 0] == 0.0
+    np.testing.assert_allclose(st["gap"][0, 0], -(1 + w) * g_l, rtol=1e-14)
+    tr, st, tang = law.update(np.array([[0.25 * g_l, 0.0, 0.0]]), st, 1.0)  # unload
+    np.testing.assert_allclose(tr[0, 0], -(0.75 + w) * qb, rtol=1e-12)
+    assert tang[0, 0, 0] == kn
+    tr, st, _ = law.update(np.array([[(0.75 + w) * g_l + 1e-9, 0.0, 0.0]]), st, 1.0)  # opens
+    assert np.all(tr == 0.0) and st["detached"][0, 0] == 1.0
+    # the corner: continuous stress and stiffness through (1 -+ w) q_b
+    x = np.array([1 - w - 1e-12, 1 - w + 1e-12, 1.0, 1 + w - 1e-12, 1 + w + 1e-12])
+    h, dh = bearing_curve(x)
+    np.testing.assert_allclose(h, [1 - w, 1 - w, 1 - w / 4, 1.0, 1.0], atol=1e-11)
+    np.testing.assert_allclose(dh, [1.0, 1.0, 0.5, 0.0, 0.0], atol=1e-10)
+    y = np.linspace(0.0, 1.0, 41)
+    np.testing.assert_allclose(bearing_curve(bearing_curve_inverse(y))[0], y, atol=1e-14)
+    # the same law without the limit is a plain penalty
+    tr, _, _ = law2(integrator=integrator).update(
+        np.array([[-5.0 * g_l, 0.0, 0.0]]), law.initial_state(1, np.zeros(3)), 1.0)
+    np.testing.assert_allclose(tr[0, 0], -5.0 * qb, rtol=1e-12)
+    with pytest.raises(ConstitutiveError, match="bearing"):
+        law2(bearing=0.0)
+    # an in-situ compression beyond the limit starts at it; within it, the state gives it back
+    st = law.initial_state(3, np.array([[-qb - 1.0, 0.0, 0.0], [-qb + 1.0, 0.0, 0.0],
+                                        [-0.5 * qb, 0.0, 0.0]]))
+    tr, _, _ = law.update(np.zeros((3, 3)), st, 0.0)
+    np.testing.assert_allclose(tr[:, 0], [-qb, -qb + 1.0, -0.5 * qb], rtol=1e-13)
+    np.testing.assert_allclose(st["traction"][:, 0], tr[:, 0], rtol=1e-13)
+
+
+@pytest.mark.parametrize("where", ["corner", "plateau"])
+@pytest.mark.parametrize("plastic", [False, True])
+def test_tangent_fd_at_bearing_limit(where, plastic):
+    """Consistent tangent against central differences at the bearing limit's corner and plateau.
+
+    The points start at ``-q_b`` (states at 80-200 kPa, ``q_b`` = 60 kPa) and close by 1-3e-5 m
+    (plateau: the normal row is zero and the shear block sees ``p = q_b``) or open back into the
+    rounded corner (``(1 -+ w) q_b``); 1e-6 relative per block of rows.
+    """
+    rng = np.random.default_rng(7 + plastic)
+    n = 30
+    st, inc = random_states(law2(), rng, n, plastic)
+    qb = 60.0
+    law = law2(bearing=qb)
+    kn = law.k_normal
+    st = dict(st)
+    st["gap"] = np.maximum(st["gap"], -(1 + BEARING_ROUNDING) * qb / kn)
+    if where == "plateau":
+        inc[:, 0] = -rng.uniform(1.0, 3.0, n) * 1e-5
+    else:
+        inc[:, 0] = rng.uniform(0.1, 1.9, n) * BEARING_ROUNDING * qb / kn
+    dt = 20.0
+    tr, _, tang = law.update(inc, st, dt)
+    if where == "plateau":
+        np.testing.assert_array_equal(tr[:, 0], -qb)
+        assert np.all(tang[:, 0, :] == 0.0)
+    else:
+        assert np.all((tr[:, 0] > -qb) & (tr[:, 0] < -(1 - BEARING_ROUNDING) * qb))
+        assert np.all((tang[:, 0, 0] > 0.0) & (tang[:, 0, 0] < kn))
+    fd = np.empty_like(tang)
+    for j in range(3):
+        h = 1e-6 * qb / kn if j == 0 else 1e-8
+        e = np.zeros(3)
+        e[j] = h
+        tp, _, _ = law.update(inc + e, st, dt)
+        tm, _, _ = law.update(inc - e, st, dt)
+        fd[:, :, j] = (tp - tm) / (2 * h)
+    err = np.zeros(n)
+    for rows in (slice(0, 1), slice(1, 3)):
+        A, B = tang[:, rows, :], fd[:, rows, :]
+        scale = np.maximum(np.linalg.norm(A, axis=(1, 2)), 1e-300)
+        err = np.maximum(err, np.where(np.linalg.norm(A, axis=(1, 2)) > 0,
+                                       np.linalg.norm(A - B, axis=(1, 2)) / scale,
+                                       np.linalg.norm(B, axis=(1, 2))))
+    assert err.max() <= 1e-6
