@@ -3,8 +3,13 @@
 Zero-thickness Goodman interface with
 
 * a **normal** penalty spring in compression and no tension: ``sigma_n = k_normal * min(g, 0)``
-  where ``g`` is the normal opening measured from the zero-traction position (state ``"gap"``);
-  ``g > 0`` means detached: all three tractions are exactly zero and ``"detached" = 1``. With a
+  where ``g`` is the normal opening measured from the zero-traction position (state ``"gap"``).
+  An opening point's shear traction fades out: ``|tau| = t (1 - k_normal g / max(t, F))``
+  (``t`` what its slip gives, ``F`` = :data:`SHEAR_FADE_KPA`), zero from ``g = max(t, F) /
+  k_normal``, so that the traction is continuous through the opening (an interface with
+  cohesion carries its full strength at zero normal stress; dropping it at once made Newton
+  switch points between open and closed from one iteration to the next); once it is zero the
+  point is detached: all three tractions are exactly zero and ``"detached" = 1``. With a
   bearing limit ``q_b`` (``bearing``, for pile bases) the compression is elastic–perfectly
   plastic: ``sigma_n >= -q_b``, the corner rounded over ``(1 -+ w) q_b`` of the penalty's stress
   (:func:`bearing_curve`, ``w`` = :data:`BEARING_ROUNDING`); a closure beyond the plateau's start
@@ -64,6 +69,10 @@ __all__ = ["PileSoilInterface", "delta_eq17", "dp_outer_cone"]
 
 _TINY = 1e-300
 
+#: The stress scale of the shear's fade at an opening, kPa: the shear traction ``t`` of an
+#: opening point falls to zero over the opening ``max(t, SHEAR_FADE_KPA) / k_normal``.
+SHEAR_FADE_KPA = 10.0
+
 #: Half-width of the rounded corner of the bearing limit, a fraction of ``q_b``.
 BEARING_ROUNDING = 0.05
 
@@ -92,7 +101,7 @@ def bearing_curve_inverse(y: np.ndarray, w: float = BEARING_ROUNDING) -> np.ndar
 class _Normal(NamedTuple):
     """Normal response of one step, per point (penalty in contact, free when detached)."""
 
-    gap: np.ndarray  #: normal opening after the step, m (> 0: detached)
+    gap: np.ndarray  #: normal opening after the step, m (> 0: no normal stress)
     contact: np.ndarray  #: bool, ``gap <= 0``
     s: np.ndarray  #: sigma_n, kPa (tension positive)
     a: np.ndarray  #: hyperbola coefficient a of Eq. 6, m/kPa
@@ -326,13 +335,14 @@ class PileSoilInterface(DruckerPragerCone):
         nc = self._normal(state_n["gap"][:, 0] + dj[:, 0])
         ge_tr, slip_vp = self._trial_slip(dj, state_n, nc, dt)
         sh = self._shear(ge_tr, nc, slip_vp, dt)
-        traction, tangent = self._traction_tangent(nc, sh)
+        traction, tangent, held = self._traction_tangent(nc, sh)
+        free = ~held[:, None]  # detached: no shear memory, open sliding is not viscoplastic
         state = {
             "traction": traction,
-            "slip_e": sh.r[:, None] * sh.e,
-            "slip_vp": slip_vp,
+            "slip_e": np.where(free, 0.0, sh.r[:, None] * sh.e),
+            "slip_vp": np.where(free, state_n["slip_vp"], slip_vp),
             "gap": nc.gap[:, None],
-            "detached": (~nc.contact).astype(float)[:, None],
+            "detached": free.astype(float),
         }
         return traction, state, tangent
 
@@ -346,16 +356,16 @@ class PileSoilInterface(DruckerPragerCone):
         qb = self.bearing
         if qb is not None:  # penetration: the opening stays where the plateau starts
             gap = np.maximum(gap, -(1.0 + BEARING_ROUNDING) * qb / kn)
-        contact = gap <= 0.0
-        s = np.where(contact, kn * gap, 0.0)
-        s_n = np.where(contact, kn, 0.0)
+        closed = gap <= 0.0
+        s = np.where(closed, kn * gap, 0.0)
+        s_n = np.where(closed, kn, 0.0)
         if qb is not None:
             h, dh = bearing_curve(-s / qb)
             s, s_n = -qb * h, s_n * dh
         a, b = self.hyperbola(s)
         p = np.maximum(-s, self.p_floor)
-        p_n = np.where(contact & (-s > self.p_floor), -s_n, 0.0)
-        return _Normal(gap, contact, s, a, b, p, s_n, p_n)
+        p_n = np.where(closed & (-s > self.p_floor), -s_n, 0.0)
+        return _Normal(gap, closed, s, a, b, p, s_n, p_n)
 
     def _trial_slip(
         self, dj: np.ndarray, state_n: dict[str, np.ndarray], nc: _Normal, dt: float
@@ -366,11 +376,10 @@ class PileSoilInterface(DruckerPragerCone):
         the step's viscoplastic slip from the committed traction here; the implicit one leaves
         it to :meth:`_shear`.
         """
-        cmask = nc.contact[:, None]
         slip_e_n = np.where(state_n["detached"] > 0.5, 0.0, state_n["slip_e"])
         slip_vp = state_n["slip_vp"].copy()
         if not (self.integrator == "explicit" and self.viscous):
-            return np.where(cmask, slip_e_n + dj[:, 1:], 0.0), slip_vp
+            return slip_e_n + dj[:, 1:], slip_vp
         tr_n = state_n["traction"]
         t_old = np.hypot(tr_n[:, 1], tr_n[:, 2])
         F_old, _, _, g_old, _, _ = self._F(t_old, tr_n[:, 0])
@@ -379,8 +388,7 @@ class PileSoilInterface(DruckerPragerCone):
         if np.any(act):
             phi, _ = self._rate(F_old[act], dt)
             dvp[act] = (phi * g_old[act] / t_old[act])[:, None] * tr_n[act, 1:]
-        ge_tr = np.where(cmask, slip_e_n + dj[:, 1:] - dvp, 0.0)
-        return ge_tr, np.where(cmask, slip_vp + dvp, slip_vp)
+        return slip_e_n + dj[:, 1:] - dvp, slip_vp + dvp
 
     def _shear(self, ge_tr: np.ndarray, nc: _Normal, slip_vp: np.ndarray, dt: float) -> _Shear:
         """Implicit radial return of the trial elastic slip; adds the return to ``slip_vp``."""
@@ -394,7 +402,7 @@ class PileSoilInterface(DruckerPragerCone):
         if self.integrator == "implicit" and self.viscous and dt > 0.0:
             a, b, s = nc.a, nc.b, nc.s
             t_tr = r_tr / (a + b * r_tr)
-            plastic = nc.contact & pos & (self._F(t_tr, s)[0] > 0.0)
+            plastic = pos & (self._F(t_tr, s)[0] > 0.0)
             if np.any(plastic):
                 idx = np.nonzero(plastic)[0]
                 rr, Rr, Rn = self._return(r_tr[idx], a[idx], b[idx], s[idx], nc.p[idx],
@@ -405,8 +413,12 @@ class PileSoilInterface(DruckerPragerCone):
                 slip_vp[idx] += (r_tr[idx] - rr)[:, None] * e[idx]
         return _Shear(r_tr, e, pos, r, dr_drtr, dr_dn)
 
-    def _traction_tangent(self, nc: _Normal, sh: _Shear) -> tuple[np.ndarray, np.ndarray]:
-        """Traction ``(n, 3)`` and consistent tangent ``(n, 3, 3)`` from the step's slip."""
+    def _traction_tangent(self, nc: _Normal, sh: _Shear
+                          ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Traction ``(n, 3)``, consistent tangent ``(n, 3, 3)``, and which points hold.
+
+        A point holds (is not detached) while closed or while its shear survives the opening.
+        """
         a, p, contact, pos, e = nc.a, nc.p, nc.contact, sh.pos, sh.e
         r = sh.r
         den = a + nc.b * r
@@ -414,22 +426,30 @@ class PileSoilInterface(DruckerPragerCone):
         t_r = a / den**2
         t_p = r * (self.n * a + nc.b * r) / (p * den**2)
         dt_dn = t_r * sh.dr_dn + t_p * nc.p_n
-        c_perp = np.where(pos, t / np.where(pos, sh.r_tr, 1.0), 1.0 / a)
-        c_par = np.where(pos, t_r * sh.dr_drtr, 1.0 / a)
-        c_perp = np.where(contact, c_perp, 0.0)
-        c_par = np.where(contact, c_par, 0.0)
+        # an opening point's shear fades out (module docstring): t (1 - k_n g / max(t, F))
+        m = np.maximum(t, SHEAR_FADE_KPA)
+        kg = self.k_normal * np.maximum(nc.gap, 0.0)
+        t_eff = np.maximum(t - kg * t / m, 0.0)
+        held = contact | (t_eff > 0.0)
+        d_t = np.where(t < SHEAR_FADE_KPA, 1.0 - kg / m, 1.0)  # d t_eff / d t
+        d_g = np.where(contact, 0.0, -self.k_normal * t / m)  # d t_eff / d opening
+        c_perp = np.where(pos, t_eff / np.where(pos, sh.r_tr, 1.0), 1.0 / a)
+        c_par = np.where(pos, d_t * t_r * sh.dr_drtr, 1.0 / a)
+        c_perp = np.where(held, c_perp, 0.0)
+        c_par = np.where(held, c_par, 0.0)
+        dt_dn = np.where(held, d_t * dt_dn + d_g, 0.0)
 
         nq = r.shape[0]
         traction = np.empty((nq, 3))
         traction[:, 0] = nc.s
-        traction[:, 1:] = t[:, None] * e
+        traction[:, 1:] = t_eff[:, None] * e
         tangent = np.zeros((nq, 3, 3))
         tangent[:, 0, 0] = nc.s_n
         tangent[:, 1:, 0] = dt_dn[:, None] * e
         ee = e[:, :, None] * e[:, None, :]
         eye = np.eye(2)[None]
         tangent[:, 1:, 1:] = c_par[:, None, None] * ee + c_perp[:, None, None] * (eye - ee)
-        return traction, tangent
+        return traction, tangent, held
 
     def _return(
         self, r_tr: np.ndarray, a: np.ndarray, b: np.ndarray, s: np.ndarray, p: np.ndarray,

@@ -18,6 +18,7 @@ import pytest
 
 from pilegroup.constitutive.interface_law import (
     BEARING_ROUNDING,
+    SHEAR_FADE_KPA,
     PileSoilInterface,
     bearing_curve,
     bearing_curve_inverse,
@@ -232,8 +233,18 @@ def test_open_close(integrator):
     tr, st, _ = law.update(np.array([[0.0, 1e-3, 0.0], [0.0, 2e-3, 1e-3]]), st, 1.0)
     assert np.all(tr[:, 1] > 0)
     g_open = 50.0 / law.k_normal
-    # open just past zero normal traction: all three tractions exactly zero
-    tr, st, tang = law.update(np.array([[g_open + 1e-9, 1e-4, 0.0],
+    kn = law.k_normal
+    # opened past zero normal traction by g: no normal stress, the shear t (1 - kn g / m),
+    # m = max(t, SHEAR_FADE_KPA); here a quarter of the fade
+    tr_c, _, _ = law.update(np.array([[g_open, 0.0, 0.0]] * 2), st, 1.0)  # sigma_n = 0
+    m = np.maximum(np.hypot(tr_c[:, 1], tr_c[:, 2]), SHEAR_FADE_KPA)
+    tr_q, st_q, tang_q = law.update(np.column_stack([g_open + 0.25 * m / kn, [0.0] * 2,
+                                                     [0.0] * 2]), st, 1.0)
+    assert np.all(tr_q[:, 0] == 0.0) and np.all(st_q["detached"] == 0.0)
+    np.testing.assert_allclose(tr_q[:, 1:], 0.75 * tr_c[:, 1:], rtol=1e-12)
+    np.testing.assert_allclose(tang_q[:, 1:, 0], -kn * tr_c[:, 1:] / m[:, None], rtol=1e-12)
+    # opened past that: all three tractions exactly zero
+    tr, st, tang = law.update(np.array([[g_open * 3, 1e-4, 0.0],
                                         [g_open * 3, -1e-4, 0.0]]), st, 1.0)
     assert np.all(tr == 0.0)
     assert np.all(st["detached"] == 1.0)
@@ -242,7 +253,7 @@ def test_open_close(integrator):
     tr, st, _ = law.update(np.array([[0.0, 1e-2, 0.0], [0.0, 0.0, 5e-3]]), st, 10.0)
     assert np.all(tr == 0.0)
     # close: contact restored with sigma_n = k_normal * overlap, detached = 0
-    tr, st, tang = law.update(np.array([[-g_open * 2 - 1e-9, 0.0, 0.0],
+    tr, st, tang = law.update(np.array([[-g_open * 4, 0.0, 0.0],
                                         [-g_open * 4, 1e-4, 0.0]]), st, 1.0)
     assert np.all(st["detached"] == 0.0)
     np.testing.assert_allclose(tr[:, 0], [-100.0, -100.0], rtol=1e-6)  # gap = -2 g_open
@@ -475,4 +486,44 @@ def test_tangent_fd_at_bearing_limit(where, plastic):
         err = np.maximum(err, np.where(np.linalg.norm(A, axis=(1, 2)) > 0,
                                        np.linalg.norm(A - B, axis=(1, 2)) / scale,
                                        np.linalg.norm(B, axis=(1, 2))))
+    assert err.max() <= 1e-6
+
+
+@pytest.mark.parametrize("integrator", ["implicit", "explicit"])
+@pytest.mark.parametrize("large", [False, True])
+def test_tangent_fd_at_an_opening(integrator, large):
+    """Consistent tangent against central differences at points opened past zero traction.
+
+    States as in test_tangent_fd (shear above yield, and a second set with the shear scaled up
+    past SHEAR_FADE_KPA); the step opens each point by 0.1-0.9 of ``max(t_0, F) / k_normal``
+    past its zero-traction position (``t_0``: the shear the step's slip gives at zero normal
+    traction), so sigma_n = 0 and the shear fades; 1e-6 relative.
+    """
+    rng = np.random.default_rng(11)
+    law = law2(integrator=integrator, R_f=0.0, viscous=False) if large \
+        else law2(integrator=integrator)
+    n = 30
+    st, inc = random_states(law2(integrator=integrator), rng, n, plastic=True)
+    if large:  # linear springs and slips large enough for a shear above SHEAR_FADE_KPA
+        st = dict(st)
+        st["slip_e"] = st["slip_e"] * 50.0
+    kn = law.k_normal
+    inc[:, 0] = -st["gap"][:, 0]  # at zero normal traction: the shear the slip gives there
+    tr0, _, _ = law.update(inc, st, 20.0)
+    m = np.maximum(np.hypot(tr0[:, 1], tr0[:, 2]), SHEAR_FADE_KPA)
+    inc[:, 0] += rng.uniform(0.1, 0.9, n) * m / kn
+    tr, new, tang = law.update(inc, st, 20.0)
+    assert np.all(tr[:, 0] == 0.0) and np.all(np.hypot(tr[:, 1], tr[:, 2]) > 0.0)
+    assert np.all(new["detached"] == 0.0)
+    assert np.all(m > SHEAR_FADE_KPA) if large else np.all(m == SHEAR_FADE_KPA)
+    fd = np.empty_like(tang)
+    for j in range(3):
+        h = 1e-6 * m.min() / kn if j == 0 else 1e-8
+        e = np.zeros(3)
+        e[j] = h
+        tp, _, _ = law.update(inc + e, st, 20.0)
+        tm, _, _ = law.update(inc - e, st, 20.0)
+        fd[:, :, j] = (tp - tm) / (2 * h)
+    A, B = tang[:, 1:, :], fd[:, 1:, :]
+    err = np.linalg.norm(A - B, axis=(1, 2)) / np.linalg.norm(A, axis=(1, 2))
     assert err.max() <= 1e-6

@@ -163,7 +163,9 @@ def test_combinations_run_on_two_ranks_and_give_the_envelope(tmp_path, small_pil
     v = rows[("V_kN", "", "last")]
     assert v["max_combination"] == "ULS" and float(v["max"]) == pytest.approx(30.0, rel=1e-3)
     m = rows[("M_max_kNm", "", "all")]
-    assert m["max_combination"] == "ULS" and float(m["max"]) >= 15.0  # at least the head's
+    # at least the head's 15 kNm, to the solver's precision (the head's is the largest here:
+    # 14.9999999 and 15.0000000 have both been computed)
+    assert m["max_combination"] == "ULS" and float(m["max"]) >= 15.0 * (1.0 - 1e-6)
     assert m["excluded"] == "collapse (failed)"
     for q in ("ux_m", "ry_rad"):
         assert rows[(q, "", "last")]["max_combination"] == "ULS"
