@@ -275,13 +275,8 @@ class Scenario:
         weight.
         """
         for n, length in enumerate(self.piles.lengths, start=1):
-            sv, j = 0.0, 0
-            for j, layer in enumerate(self.layers):
-                bottom = self.layer_bottom(j)
-                sv += (layer.gamma_kN_per_m3 - GAMMA_WATER) * (min(bottom, length)
-                                                               - self.layer_top(j))
-                if bottom >= length:
-                    break
+            j = self.layer_at(length)
+            sv = self.vertical_effective_stress(length)
             ip = self.layers[j].interface
             if ip is not None and ip.base_bearing_kPa is not None \
                     and ip.base_bearing_kPa <= sv:
@@ -333,6 +328,21 @@ class Scenario:
         if i == len(self.layers) - 1:
             return self.site.depth_m
         return self.layer_top(i) + self.layers[i].thickness_m  # type: ignore[operator]
+
+    def layer_at(self, depth: float) -> int:
+        """Index of the layer holding ``depth`` (m, positive down; a boundary: the upper one)."""
+        return next((j for j in range(len(self.layers)) if self.layer_bottom(j) >= depth),
+                    len(self.layers) - 1)
+
+    def vertical_effective_stress(self, depth: float) -> float:
+        """In-situ vertical effective stress (kPa, compression positive) at ``depth`` (m).
+
+        Hydrostatic pore pressure from the ground surface; the layers' initial excess pore
+        pressure is not taken off.
+        """
+        return sum((layer.gamma_kN_per_m3 - GAMMA_WATER)
+                   * max(min(self.layer_bottom(j), depth) - self.layer_top(j), 0.0)
+                   for j, layer in enumerate(self.layers))
 
     def layer_depths(self) -> tuple[float, ...]:
         """Depths (m, positive down) of all layer boundaries, from 0 to the block depth."""

@@ -137,11 +137,14 @@ def _load_cases(sc: Scenario) -> list[StressCase]:
 def _capacity_cases(sc: Scenario) -> list[StressCase]:
     """The last stage made a capacity stage: the foundation must fail and the run complete.
 
-    Up to 10 x the cap load over the stage: Q1-Q1, Q2-Q1, and a tied pile with Q2-Q1, where
-    the stepper gives up at the limit load (bracketed by its cut-backs).
+    Up to 10 x the cap load over the stage: Q1-Q1, Q2-Q1, a tied pile with Q2-Q1, where
+    the stepper gives up at the limit load (bracketed by its cut-backs), and Q1-Q1 with the
+    toe's resistance given as a base bearing limit (9 c_u + sigma'_v0).
     """
     last = len(sc.stages) - 1
     q = sc.total_cap_load()
+    toe_depth = max(sc.piles.lengths)
+    toe, sv_toe = sc.layer_at(toe_depth), sc.vertical_effective_stress(toe_depth)
 
     def capacity(f: float) -> tuple[str, ...]:
         return (f'stages[{last}].kind="capacity"', f"stages[{last}].max_load_kN={_num(q * f)}",
@@ -154,6 +157,11 @@ def _capacity_cases(sc: Scenario) -> list[StressCase]:
         StressCase("capacity_tied_Q2Q1", "capacity",
                    (*capacity(10.0), 'interface.mode="tied"', 'numerics.element="Q2Q1"'),
                    "capacity stage, tied pile, Q2-Q1: the stepper finds no equilibrium"),
+        StressCase("capacity_base_bearing", "capacity",
+                   (*capacity(10.0), f"layers[{toe}].interface.base_bearing_kPa="
+                    f"{_num(9.0 * sc.layers[toe].c_kPa + sv_toe)}"),
+                   "capacity stage, Q1-Q1, the toe's layer with base_bearing_kPa = 9 c_u +"
+                   " sigma'_v0 at the toe"),
     ]
 
 
