@@ -233,16 +233,14 @@ class Scenario:
 
     def _check_excess_pore_pressure(self) -> None:
         """A layer's initial excess pore pressure leaves its effective stress compressive."""
-        sv = 0.0  # vertical effective stress at the layer's top, kPa
         for i, layer in enumerate(self.layers):
+            sv = self.vertical_effective_stress(self.layer_top(i))
             if layer.excess_pore_pressure_kPa > sv + 1e-9:
                 raise ScenarioError(f"layers[{i}].excess_pore_pressure_kPa",
                                     layer.excess_pore_pressure_kPa,
                                     f"must be <= the vertical effective stress at the layer's top"
                                     f" ({sv:.4g} kPa), or the soil would start with tensile"
                                     " effective stress; use excess_pore_pressure_ratio", "kPa")
-            thickness = self.layer_bottom(i) - self.layer_top(i)
-            sv += (layer.gamma_kN_per_m3 - GAMMA_WATER) * thickness
 
     def _check_interfaces(self) -> None:
         """Every layer the piles cross has interface parameters, unless the piles are tied.

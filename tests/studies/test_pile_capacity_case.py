@@ -6,7 +6,6 @@ run under ``mpirun -n 2``. The scenario key ``layers.interface.base_bearing_kPa`
 base laws only, and a limit the in-situ stress already exceeds is refused.
 """
 
-import copy
 import math
 
 import pytest
@@ -55,7 +54,7 @@ def test_base_bearing_reaches_the_base_laws_only():
 
 
 def _with_bearing(value):
-    doc = copy.deepcopy(pile_capacity_scenario())
+    doc = pile_capacity_scenario()
     doc["layers"][0]["interface"]["base_bearing_kPa"] = value
     return doc
 
