@@ -349,7 +349,8 @@ class LinearSolver:
     ``fieldsplit_pier`` or ``fieldsplit_kept`` falls back to ``direct_reuse`` (a kept LU in
     single precision), which falls back to ``direct_reuse_double`` (the same in double);
     ``direct_reuse_ooc`` is ``direct_reuse`` with its factors out of core (files under
-    ``TMPDIR``), which ``auto`` takes when the in-core one exceeds the memory a run may use.
+    ``TMPDIR``), which ``auto`` takes when the in-core one exceeds the memory a run may use,
+    and falls back to ``direct_reuse_ooc_double`` (the same in double, still out of core).
 
     ``krylov_forcing``: inexact Newton (presets whose Krylov solve supports it, e.g.
     ``direct_reuse``): a Newton correction's Krylov solve stops once every block's linear
@@ -358,7 +359,8 @@ class LinearSolver:
     """
 
     preset: Literal["auto", "direct", "direct_reuse", "direct_reuse_double", "direct_reuse_ooc",
-                    "fieldsplit_gamg", "fieldsplit_pier", "fieldsplit_kept"] = "auto"
+                    "direct_reuse_ooc_double", "fieldsplit_gamg", "fieldsplit_pier",
+                    "fieldsplit_kept"] = "auto"
     options: dict[str, str | int | float | bool] = field(default_factory=dict)
     krylov_forcing: float = 0.1
 

@@ -5,7 +5,8 @@ Presets:
 * ``direct``: MUMPS LU (robust, for small and medium problems; the default).
 * ``direct_reuse``: FGMRES on the current Jacobian preconditioned by a kept block low-rank
   MUMPS LU in single precision; ``direct_reuse_double``: the same LU in double precision (the
-  fallback of ``direct_reuse``).
+  fallback of ``direct_reuse``); ``direct_reuse_ooc`` and its fallback
+  ``direct_reuse_ooc_double``: the same two with the factors out of core.
 * ``fieldsplit_gamg``: FGMRES preconditioned by a block Gauss–Seidel (``multiplicative``
   field split) of the u–p system. The displacement block is solved by one GAMG V-cycle with the
   rigid-body near-nullspace; the pressure block of the preconditioning matrix carries the
@@ -214,8 +215,13 @@ PRESETS["direct_reuse_double"] = dataclasses.replace(
 # kept them in memory), read back by every solve: docs/solver.md, docs/benchmarks.md
 PRESETS["direct_reuse_ooc"] = dataclasses.replace(
     PRESETS["direct_reuse"], name="direct_reuse_ooc", out_of_core=True,
+    fallback="direct_reuse_ooc_double",
     options={**PRESETS["direct_reuse"].options, "mat_mumps_icntl_22": 1,
              "mat_mumps_icntl_35": 3})
+# its fallback stays out of core: the run took it because the in-core factors do not fit
+PRESETS["direct_reuse_ooc_double"] = dataclasses.replace(
+    PRESETS["direct_reuse_ooc"], name="direct_reuse_ooc_double", fallback=None,
+    options={**PRESETS["direct_reuse_ooc"].options, "pc_precision": "double"})
 PRESETS["fieldsplit_kept"] = dataclasses.replace(
     PRESETS["fieldsplit_pier"], name="fieldsplit_kept", keep_blocks=("structure",), keep_its=60)
 

@@ -40,16 +40,19 @@ def _run(preset, overrides=None, stages=None):
 
 
 @pytest.mark.parametrize(("preset", "fallback"), [("fieldsplit_gamg", "direct_reuse"),
-                                                ("direct_reuse", "direct_reuse_double")])
+                                                ("direct_reuse", "direct_reuse_double"),
+                                                ("direct_reuse_ooc", "direct_reuse_ooc_double")])
 def test_a_failing_preset_falls_back(caplog, preset, fallback):
     """An instantaneous (undrained) load step that the preset cannot solve (one Krylov
     iteration allowed): its fallback solves the same step, so the answer is the direct
     solver's. The split hands over to the kept LU; the kept single-precision LU to the same
-    method in double precision."""
+    method in double precision, in core or, for the out-of-core LU (taken when memory is
+    short), out of core."""
     ref, ref_log = _run("direct")
     with caplog.at_level(logging.WARNING, logger="pilegroup.solver.linsolve"):
         pb, log = _run(preset, {"ksp_max_it": 1})
     assert pb.linear_solver.preset == fallback
+    assert pb.linear_solver.spec.out_of_core == preset.endswith("_ooc")
     assert len(pb.linear_solver.fallbacks) == 1
     assert f"'{preset}' failed" in pb.linear_solver.fallbacks[0]
     if MPI.COMM_WORLD.rank == 0:
@@ -59,6 +62,7 @@ def test_a_failing_preset_falls_back(caplog, preset, fallback):
     assert pb.max_displacement() == pytest.approx(ref.max_displacement(), rel=1e-8)
     p, p_ref = pb.p.x.array, ref.p.x.array
     assert np.max(np.abs(p - p_ref)) <= 1e-8 * max(np.max(np.abs(p_ref)), 1e-30)
+    pb.linear_solver.close()  # MUMPS ends before its out-of-core folder goes
 
 
 def test_a_failed_krylov_solve_hands_over_without_cutting_the_step():
