@@ -9,6 +9,10 @@ first rank claims the next case by creating its numbered file in ``<out>/.queue/
 waits for another's MPI progress and nothing can deadlock: a group that finds every number taken is
 done. Ranks that are done wait for the others without spinning (``Ibarrier`` polled).
 
+Memory: cases that run side by side share a node, so each case's memory check (and ``auto``'s
+turn to the out-of-core LU) gets its ranks' share of the node's memory, not the whole of it
+(:func:`~pilegroup.studies.run.memory_check.case_memory_mb`; ``--memory`` sets the node's).
+
 Before anything runs, every case's scenario is validated; a case whose folder already holds a
 complete run of the same resolved scenario (:func:`~pilegroup.studies.batch.rows.is_complete`)
 is skipped, every other case is run again from an emptied folder (a killed batch resumes).
@@ -73,6 +77,7 @@ from pilegroup.studies.run import interrupt
 from pilegroup.studies.run.folder_lock import empty_folder, folder_lock
 from pilegroup.studies.run.interrupt import abort_job
 from pilegroup.studies.run.job import run_scenario
+from pilegroup.studies.run.memory_check import case_memory_mb
 
 log = logging.getLogger(__name__)
 
@@ -194,7 +199,7 @@ def _agree(exc: Exception, group: MPI.Comm, err_comm: MPI.Comm, world: MPI.Comm,
 
 
 def _run_case(rc: ResolvedCase, run_dir: Path, group: MPI.Comm, err_comm: MPI.Comm,
-              world: MPI.Comm, options: dict[str, str]) -> bool:
+              world: MPI.Comm, options: dict[str, str], memory_mb: float) -> bool:
     """Run one case on ``group`` into its locked, emptied ``run_dir``; False if not run.
 
     The first rank records the case. False (on every rank of the group) when another run holds
@@ -202,7 +207,7 @@ def _run_case(rc: ResolvedCase, run_dir: Path, group: MPI.Comm, err_comm: MPI.Co
     """
     try:
         with folder_lock(run_dir, group):
-            _run_locked_case(rc, run_dir, group, err_comm, world, options)
+            _run_locked_case(rc, run_dir, group, err_comm, world, options, memory_mb)
     except FolderBusy as exc:
         if group.rank == 0:
             log.warning("case %s not run: %s", rc.name, exc)
@@ -211,7 +216,7 @@ def _run_case(rc: ResolvedCase, run_dir: Path, group: MPI.Comm, err_comm: MPI.Co
 
 
 def _run_locked_case(rc: ResolvedCase, run_dir: Path, group: MPI.Comm, err_comm: MPI.Comm,
-                     world: MPI.Comm, options: dict[str, str]) -> None:
+                     world: MPI.Comm, options: dict[str, str], memory_mb: float) -> None:
     start = time.time()
     if group.rank == 0:
         empty_folder(run_dir)
@@ -223,7 +228,7 @@ def _run_locked_case(rc: ResolvedCase, run_dir: Path, group: MPI.Comm, err_comm:
     restore_petsc_options(options)
     status, message = "complete", None
     try:
-        run_scenario(rc.scenario, run_dir, comm=group)
+        run_scenario(rc.scenario, run_dir, comm=group, memory_mb=memory_mb)
     except RunInterrupted as exc:  # the group's ranks stop together at a step boundary
         status, message = "interrupted", str(exc)
     except Exception as exc:  # noqa: BLE001 - recorded; the batch goes on (or aborts, above)
@@ -351,8 +356,14 @@ def _prepare(cases: tuple[ResolvedCase, ...], out: Path, comm: MPI.Comm
 
 
 def run_batch(plan: BatchPlan, out: str | Path, ranks_per_case: int = 1,
-              comm: MPI.Comm = MPI.COMM_WORLD, progress: bool = True) -> BatchResult:
+              comm: MPI.Comm = MPI.COMM_WORLD, progress: bool = True,
+              memory_mb: float | None = None) -> BatchResult:
     """Run every case of ``plan`` not yet complete under ``out``; collective over ``comm``.
+
+    ``memory_mb``: the memory the batch may use on each node (``--memory``; else what the node
+    has available when the batch starts), shared among the cases that run side by side
+    (:func:`~pilegroup.studies.run.memory_check.case_memory_mb`): each case's memory check,
+    and ``auto``'s turn to the out-of-core LU, use that share.
 
     Raises :class:`~pilegroup.errors.ScenarioError` (on every rank, before anything runs) for
     an invalid case or a ``ranks_per_case`` that does not divide ``comm.size``.
@@ -369,6 +380,7 @@ def run_batch(plan: BatchPlan, out: str | Path, ranks_per_case: int = 1,
                 "host": platform.node(), "started": time.strftime("%Y-%m-%dT%H:%M:%S"),
                 "queue": "largest estimated mesh first"}
         monitor = _Monitor(cases, out, skipped, head, progress)
+    case_mb = case_memory_mb(comm, group, memory_mb)
     err_comm = group.Dup()
     options = PETSc.Options().getAll()
     busy = 0  # cases whose folder another run held (counted by each group's first rank)
@@ -376,7 +388,7 @@ def run_batch(plan: BatchPlan, out: str | Path, ranks_per_case: int = 1,
         while (index := group.bcast(queue.claim() if group.rank == 0 and not
                                     interrupt.requested() else None)) is not None:
             if not _run_case(cases[index], out / cases[index].name, group, err_comm, comm,
-                             options) and group.rank == 0:
+                             options, case_mb) and group.rank == 0:
                 busy += 1
         _wait_for_all(comm)
         rows = monitor.finish() if monitor is not None else []

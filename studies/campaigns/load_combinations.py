@@ -49,15 +49,18 @@ def intro_lines(plan: CombinationPlan) -> list[str]:
 
 
 def run_combinations(path: str | Path, out: str | Path, ranks_per_case: int = 1,
-                     comm: MPI.Comm = MPI.COMM_WORLD, progress: bool = True) -> BatchResult:
+                     comm: MPI.Comm = MPI.COMM_WORLD, progress: bool = True,
+                     memory_mb: float | None = None) -> BatchResult:
     """Run every combination of the file ``path`` not yet complete under ``out``; the envelope.
+
+    ``memory_mb``: the memory the combinations may use on each node (:func:`run_batch`).
 
     Collective over ``comm``. Raises :class:`~pilegroup.errors.ScenarioError` (on every rank,
     before anything runs) for an invalid file or combination.
     """
     out = Path(out)
     plan = load_combination_plan(path)
-    result = run_batch(plan.batch_plan(), out, ranks_per_case, comm, progress)
+    result = run_batch(plan.batch_plan(), out, ranks_per_case, comm, progress, memory_mb)
     if comm.rank == 0:
         write_envelope(out, combination_runs(plan, result.rows, out), plan.name,
                        intro_lines(plan))

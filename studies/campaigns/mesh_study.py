@@ -15,7 +15,8 @@ Memory estimate: the one each run makes of itself before meshing (cells and unkn
 model part, the preset it will use, that preset family's fit of measured peaks;
 docs/benchmarks.md, "Memory estimate before meshing"), times the ranks of a case. Cases run side
 by side share the machine, so a case may use the machine's memory divided by the number of
-groups.
+groups; with that share ``auto`` takes the out-of-core LU for a size whose in-core factors
+would not fit, and the batch gives each case the same share for its own memory check.
 """
 
 from __future__ import annotations
@@ -50,14 +51,18 @@ def machine_memory_mb() -> float:
 
 def check_size(source: str, sets: Mapping[str, Any], h: float, ranks: int, groups: int,
                memory_mb: float) -> SizeCheck:
-    """Whether size ``h`` validates and fits ``memory_mb / groups`` on ``ranks`` ranks."""
+    """Whether size ``h`` validates and fits ``memory_mb / groups`` on ``ranks`` ranks.
+
+    With that budget ``auto`` may take the out-of-core LU, as the case's own run will
+    (:func:`~pilegroup.studies.run.memory_check.run_estimate`).
+    """
     try:
         sc = load_scenario(source, {**sets, SIZE_KEY: h})
     except ScenarioError as exc:
         return SizeCheck(h, False, f"invalid: {exc}")
-    cells, n, _, per_rank = run_estimate(sc, resolve_geometry(sc), ranks)
-    mem = per_rank * ranks
     budget = memory_mb / groups
+    cells, n, _, per_rank = run_estimate(sc, resolve_geometry(sc), ranks, budget / ranks)
+    mem = per_rank * ranks
     ok = mem <= budget
     reason = "" if ok else (
         f"needs about {mem / 1024:.1f} GB ({n:,.0f} unknowns estimated) > {budget / 1024:.1f} "
@@ -107,7 +112,7 @@ def run_mesh_study(source: str, sets: Mapping[str, Any], sizes: Sequence[float],
     rows: list[BatchRow] = []
     if cases:
         result = run_batch(study_plan(source, sets, sc, cases), out, ranks_per_case, comm,
-                           progress)
+                           progress, memory)
         rows, failed = result.rows, result.failed
     if comm.rank == 0:
         info = StudyInfo(sc, tuple(checks), tuple(cases), comm.size, ranks_per_case, memory,

@@ -9,6 +9,7 @@ input, 143/130/138 stopped by SIGTERM/SIGINT/SIGUSR1 (the running cases recorded
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -49,6 +50,20 @@ STUDY_DESCRIPTION = (
     "Richardson extrapolation, observed order and GCI (Celik et al. 2008), error against time, "
     "centre-pile profiles for every size, the penalty check; sizes that are invalid or would not "
     "fit the machine's memory are reported, not run.")
+
+
+def memory_size(text: str) -> float:
+    """``--memory``'s value in MB: a number with its unit, MB or GB (1 GB = 1024 MB)."""
+    units = {"MB": 1.0, "GB": 1024.0}
+    value, unit = text.strip()[:-2], text.strip()[-2:].upper()
+    try:
+        mb = float(value) * units[unit]
+    except (KeyError, ValueError):
+        mb = math.nan
+    if not mb > 0.0 or math.isinf(mb):
+        raise argparse.ArgumentTypeError(
+            f"{text[:40]!r}: allowed: a positive size with its unit, e.g. 8GB or 6000MB")
+    return mb
 
 
 def _world_rank() -> int:
@@ -96,7 +111,8 @@ def _cmd_batch(args: argparse.Namespace) -> int:
         plan = load_plan(args.plan)
         out = Path(args.out) if args.out else Path("out") / Path(args.plan).stem
         with stop_on_signals():  # running cases stop at a step boundary, recorded interrupted
-            result = run_batch(plan, out, args.ranks_per_case, progress=not args.no_progress)
+            result = run_batch(plan, out, args.ranks_per_case, progress=not args.no_progress,
+                               memory_mb=args.memory)
     except ScenarioError as exc:
         return _input_error_once(exc)
     return _finish(result, "batch", f"{out / 'batch.csv'}, {out / 'batch.json'}",
@@ -109,6 +125,11 @@ def batch_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--out", help="batch folder (default: out/<plan file stem>)")
     p.add_argument("--ranks-per-case", type=int, default=1, metavar="K",
                    help="MPI ranks of each case (must divide the number of ranks; default 1)")
+    p.add_argument("--memory", type=memory_size, default=None, metavar="SIZE",
+                   help="memory the cases may use together on each node, e.g. 8GB or 6000MB "
+                   "(default: what the node has available); each case gets the share of its "
+                   "ranks, and with preset auto a case whose in-core factors would exceed it "
+                   "writes them out of core")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=_cmd_batch)
 
@@ -122,7 +143,7 @@ def _cmd_combinations(args: argparse.Namespace) -> int:
         out = Path(args.out) if args.out else Path("out") / Path(args.file).stem
         with stop_on_signals():  # running cases stop at a step boundary, recorded interrupted
             result = run_combinations(args.file, out, args.ranks_per_case,
-                                      progress=not args.no_progress)
+                                      progress=not args.no_progress, memory_mb=args.memory)
     except ScenarioError as exc:
         return _input_error_once(exc)
     return _finish(result, "combinations", f"{out / ENVELOPE_MD}, {out / ENVELOPE_CSV}",
@@ -137,6 +158,11 @@ def combinations_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--ranks-per-case", type=int, default=1, metavar="K",
                    help="MPI ranks of each combination's run (must divide the number of ranks; "
                    "default 1)")
+    p.add_argument("--memory", type=memory_size, default=None, metavar="SIZE",
+                   help="memory the cases may use together on each node, e.g. 8GB or 6000MB "
+                   "(default: what the node has available); each case gets the share of its "
+                   "ranks, and with preset auto a case whose in-core factors would exceed it "
+                   "writes them out of core")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=_cmd_combinations)
 
@@ -148,7 +174,7 @@ def _cmd_study_mesh(args: argparse.Namespace) -> int:
         sets = dict(parse_override(t) for t in (args.set or []))
         out = Path(args.out) if args.out else Path("out") / (
             "mesh_study_" + Path(args.scenario).stem)
-        memory = None if args.memory_gb is None else args.memory_gb * 1024.0
+        memory = args.memory if args.memory_gb is None else args.memory_gb * 1024.0
         failed = run_mesh_study(args.scenario, sets, args.sizes, out, args.ranks_per_case,
                                 args.penalty_factor, memory, progress=not args.no_progress)
     except ScenarioError as exc:
@@ -176,8 +202,13 @@ def study_arguments(p: argparse.ArgumentParser) -> None:
     m.add_argument("--penalty-factor", type=float, default=10.0, metavar="F",
                    help="multiplier of interface.normal_stiffness_factor for the penalty check "
                    "(default 10; 1 skips it)")
-    m.add_argument("--memory-gb", type=float, default=None, metavar="GB",
-                   help="memory the cases may use together (default: the machine's memory)")
+    mem = m.add_mutually_exclusive_group()
+    mem.add_argument("--memory", type=memory_size, default=None, metavar="SIZE",
+                     help="memory the cases may use together, e.g. 8GB or 6000MB (default: the "
+                     "machine's memory); each case gets the share of its ranks, and with preset "
+                     "auto a case whose in-core factors would exceed it writes them out of core")
+    mem.add_argument("--memory-gb", type=float, default=None, metavar="GB",
+                     help="the same in GB, a number without its unit")
     m.add_argument("--no-progress", action="store_true", help="no progress bar")
     m.set_defaults(func=_cmd_study_mesh)
 

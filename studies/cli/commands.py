@@ -16,7 +16,6 @@ from __future__ import annotations
 import argparse
 import json
 import logging
-import math
 import os
 import shlex
 import signal
@@ -33,6 +32,7 @@ from pilegroup.fileio import write_text_atomic
 from pilegroup.model import BUNDLED, PilegroupError, ScenarioError, bundled_text, load_scenario
 from pilegroup.model.loader import parse_override
 from pilegroup.studies.cli.batch_commands import COMMANDS as BATCH_COMMANDS
+from pilegroup.studies.cli.batch_commands import memory_size
 from pilegroup.studies.cli.lab_commands import COMMANDS as LAB_COMMANDS
 from pilegroup.studies.run.interrupt import abort_job
 
@@ -176,20 +176,6 @@ def _run_arguments(p: argparse.ArgumentParser) -> None:
                    "the node has available); with preset auto a run whose in-core factors "
                    "would exceed it writes them out of core (TMPDIR)")
     p.set_defaults(func=_cmd_run)
-
-
-def memory_size(text: str) -> float:
-    """``--memory``'s value in MB: a number with its unit, MB or GB (1 GB = 1024 MB)."""
-    units = {"MB": 1.0, "GB": 1024.0}
-    value, unit = text.strip()[:-2], text.strip()[-2:].upper()
-    try:
-        mb = float(value) * units[unit]
-    except (KeyError, ValueError):
-        mb = math.nan
-    if not mb > 0.0 or math.isinf(mb):
-        raise argparse.ArgumentTypeError(
-            f"{text[:40]!r}: allowed: a positive size with its unit, e.g. 8GB or 6000MB")
-    return mb
 
 
 def _stiffness_arguments(p: argparse.ArgumentParser) -> None:

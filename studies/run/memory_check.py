@@ -142,15 +142,32 @@ def _preset_and_need(sc: Scenario, geo: ResolvedGeometry, unknowns: float, ranks
     return preset, estimated_peak_mb(unknowns, preset, ranks)
 
 
-def available_mb_per_rank(comm: MPI.Comm) -> tuple[float, int]:
-    """``(MB available per rank, ranks on this node)``; the smallest over the nodes (collective)."""
+def ranks_on_node(comm: MPI.Comm) -> int:
+    """The ranks of ``comm`` on this rank's node (collective)."""
     node = comm.Split_type(MPI.COMM_TYPE_SHARED)
     try:
-        local = node.size
+        return node.size
     finally:
         node.Free()
+
+
+def available_mb_per_rank(comm: MPI.Comm) -> tuple[float, int]:
+    """``(MB available per rank, ranks on this node)``; the smallest over the nodes (collective)."""
+    local = ranks_on_node(comm)
     per_rank = available_mb() / local
     return comm.allreduce(per_rank, op=MPI.MIN), local
+
+
+def case_memory_mb(world: MPI.Comm, group: MPI.Comm, memory_mb: float | None = None) -> float:
+    """The memory (MB per node) a batch case run on ``group`` may use, for its memory check.
+
+    A node's memory (``memory_mb``, else what it has available when the batch starts) is
+    shared among the batch's ranks on it (``world``; the smallest share over the nodes), and a
+    case gets the share of each of its ranks on the node: cases that run side by side never
+    plan on the same memory (collective over ``world``, then ``group``).
+    """
+    share = (available_mb() if memory_mb is None else memory_mb) / ranks_on_node(world)
+    return world.allreduce(share, op=MPI.MIN) * ranks_on_node(group)
 
 
 def available_mb() -> float:
@@ -212,5 +229,5 @@ def memory_on_mesh(sc: Scenario, geo: ResolvedGeometry, unknowns: int, comm: MPI
 
 
 __all__ = ["BASE_MB", "FITS", "MEASURED_PEAKS", "OUT_OF_CORE", "available_mb",
-           "available_mb_per_rank", "estimated_peak_mb", "estimated_unknowns", "memory_check",
-           "memory_on_mesh", "preset_within"]
+           "available_mb_per_rank", "case_memory_mb", "estimated_peak_mb", "estimated_unknowns",
+           "memory_check", "memory_on_mesh", "preset_within", "ranks_on_node"]

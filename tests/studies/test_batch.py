@@ -61,11 +61,15 @@ def _summary(run):
 def test_two_cases_run_at_once_on_two_ranks(tmp_path, small_pile):
     plan = _plan(small_pile, '[sweep]\n"interface.mode" = ["viscoplastic", "elastic"]\n')
     out = tmp_path / "batch"
-    r = subprocess.run(_command(plan, out, ranks=2), capture_output=True, text=True,
-                       timeout=300, env=_env(tmp_path))
+    r = subprocess.run([*_command(plan, out, ranks=2), "--memory", "6GB"], capture_output=True,
+                       text=True, timeout=300, env=_env(tmp_path))
     assert r.returncode == 0, r.stderr[-3000:]
     cases = _cases(out)
     assert set(cases) == {"mode=viscoplastic", "mode=elastic"}
+    for c in cases.values():  # side by side on one node: each case plans on half of 6 GB
+        memory = _summary(Path(c["run_dir"]))["memory"]
+        assert memory["limit_mb"] == pytest.approx(3072.0)
+        assert memory["budget_mb_per_rank"] <= 3072.0
     a, b = cases.values()
     assert a["status"] == b["status"] == "complete" and a["ranks"] == b["ranks"] == 1
     assert max(a["start"], b["start"]) < min(a["end"], b["end"]), (a, b)  # side by side

@@ -168,3 +168,21 @@ def test_the_unknowns_counted_on_the_mesh_decide_again():
     assert rec["estimate_on_mesh_mb_per_rank"] < 0.95 * in_core
     rec = memory_on_mesh(sc, geo, n, comm, before | {"budget_mb_per_rank": 1.05 * in_core})
     assert rec["preset"] == "direct_reuse"
+
+
+def test_a_batch_case_plans_on_its_ranks_share_of_the_node():
+    """Serially the one case gets the node's memory (given, or available); the two-rank run
+    of tests/studies/test_batch.py checks the share of cases side by side."""
+    from mpi4py import MPI
+
+    from pilegroup.studies.run.memory_check import available_mb, case_memory_mb
+
+    world = MPI.COMM_WORLD
+    if world.size == 1:
+        assert case_memory_mb(world, world, 8000.0) == pytest.approx(8000.0)
+        assert case_memory_mb(world, world) == pytest.approx(available_mb(), rel=0.2)
+    single = world.Split(world.rank)
+    try:
+        assert case_memory_mb(world, single, 8000.0) == pytest.approx(8000.0 / world.size)
+    finally:
+        single.Free()

@@ -42,6 +42,20 @@ def test_a_size_that_does_not_fit_is_reported_with_the_reason(small_pile):
     assert not bad.runnable and bad.reason.startswith("invalid: numerics.mesh.")
 
 
+def test_a_size_that_fits_only_out_of_core_runs_out_of_core():
+    """The quarter pier at 1 m on one rank: with a share of memory between the out-of-core and
+    the in-core estimates of the kept LU the size runs (its case takes the out-of-core LU);
+    below the out-of-core estimate it is reported, not run."""
+    n = check_size("pier667", {}, 1.0, ranks=1, groups=1, memory_mb=1e6).estimated_unknowns
+    in_core = estimated_peak_mb(n, "direct_reuse", 1)
+    ooc = estimated_peak_mb(n, "direct_reuse_ooc", 1)
+    assert ooc < in_core
+    mid = check_size("pier667", {}, 1.0, ranks=1, groups=2, memory_mb=ooc + in_core)
+    assert mid.runnable and mid.estimated_memory_mb == pytest.approx(ooc)
+    low = check_size("pier667", {}, 1.0, ranks=1, groups=2, memory_mb=1.9 * ooc)
+    assert not low.runnable and low.estimated_memory_mb == pytest.approx(ooc)
+
+
 def test_memory_grows_with_the_unknowns():
     """Per case (all its ranks): more unknowns, more memory; more ranks, more in all."""
     def case_mb(n, ranks):
