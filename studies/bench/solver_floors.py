@@ -11,7 +11,13 @@ run, every piece a Newton solve is made of:
   gives that block;
 * the whole field-split preconditioner: set-up and one application, and the FGMRES solve of a
   random right-hand side to the preset's tolerance (iterations, time);
-* the kept LU of ``direct_reuse``: one factorisation and one solve with it.
+* the kept LU of ``direct_reuse``: one factorisation and one solve with it;
+* the machine's own floors, every rank at once: the memory bandwidth of a streaming pass
+  (numpy, single precision) and the single-precision matrix product's rate (numpy's BLAS, one
+  thread per rank as in a run). From them the ``floor_s`` of a matrix–vector product (its
+  values and column indices read once) and of a solve with the kept LU (the effective factor
+  entries MUMPS reports, ``INFOG(35)``, read once in single precision): what that piece would
+  take at the machine's bandwidth, against the measured ``apply_s``.
 
 Times are the median of repeated applications (the set-ups: one each). A whole run's time is
 about (Newton solves) x (preconditioner set-ups and Krylov iterations) x these costs, which is
@@ -28,13 +34,20 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 from mpi4py import MPI
 from petsc4py import PETSc
 
 from pilegroup.solver.linsolve import create_ksp, merged_options
 from pilegroup.studies.bench.benchrun import write_table
 
-COLUMNS = ("piece", "rows", "nonzeros", "set_up_s", "apply_s", "iterations")
+COLUMNS = ("piece", "rows", "nonzeros", "set_up_s", "apply_s", "iterations", "floor_s", "rate")
+#: Bytes per nonzero of an AIJ product (a double value and a 32-bit column index).
+AIJ_BYTES = 12
+#: Single-precision words of the streaming pass per rank (200 MB each of three arrays).
+STREAM_WORDS = 50_000_000
+#: Order of the single-precision matrix product timed.
+GEMM_N = 2000
 
 
 class _FirstLoadStep(Exception):
@@ -68,16 +81,59 @@ def _block_ksp(comm: MPI.Comm, M: PETSc.Mat, prefix: str, block: str,
 
 
 def _row(piece: str, M: PETSc.Mat | None, set_up: float | None, apply: float | None,
-         its: int | None = None) -> dict[str, Any]:
+         its: int | None = None, floor: float | None = None,
+         rate: str | None = None) -> dict[str, Any]:
     rows = M.getSize()[0] if M is not None else None
     nnz = int(M.getInfo(PETSc.Mat.InfoType.GLOBAL_SUM)["nz_used"]) if M is not None else None
     return {"piece": piece, "rows": rows, "nonzeros": nnz,
             "set_up_s": None if set_up is None else round(set_up, 4),
-            "apply_s": None if apply is None else round(apply, 5), "iterations": its}
+            "apply_s": None if apply is None else round(apply, 5), "iterations": its,
+            "floor_s": None if floor is None else float(f"{floor:.3g}"), "rate": rate}
+
+
+def machine_rates(comm: MPI.Comm, repeats: int = 5) -> tuple[float, float]:
+    """``(bytes/s, flop/s)`` per rank with every rank at once: a streaming pass, a matrix product.
+
+    The pass is ``c = 2 a; c += b`` over single-precision arrays of :data:`STREAM_WORDS` (five
+    words moved per entry); the product is of two :data:`GEMM_N` square single-precision
+    matrices. Best of ``repeats``, the slowest rank's (collective).
+    """
+    a, b = np.ones(STREAM_WORDS, np.float32), np.ones(STREAM_WORDS, np.float32)
+    c = np.empty_like(a)
+
+    def stream() -> None:
+        np.multiply(a, 2.0, out=c)
+        np.add(c, b, out=c)
+
+    rng = np.random.default_rng(comm.rank)
+    x, y = (rng.random((GEMM_N, GEMM_N), dtype=np.float32) for _ in range(2))
+    t_stream = min(_timed(comm, stream) for _ in range(repeats))
+    t_gemm = min(_timed(comm, lambda: x @ y) for _ in range(repeats))
+    return 5 * 4 * STREAM_WORDS / t_stream, 2.0 * GEMM_N ** 3 / t_gemm
+
+
+def mumps_count(value: int) -> float:
+    """A MUMPS ``INFO``/``INFOG`` count: negative values are millions."""
+    return float(value) if value >= 0 else -1e6 * value
+
+
+def _machine_rows(comm: MPI.Comm) -> tuple[list[dict[str, Any]], float]:
+    """The machine's rows and its bandwidth per rank (bytes/s)."""
+    bandwidth, flops = machine_rates(comm)
+    return [_row("machine: streaming pass, every rank at once", None, None, None,
+                 rate=f"{bandwidth / 1e9:.1f} GB/s per rank"),
+            _row("machine: single-precision matrix product, every rank at once", None, None,
+                 None, rate=f"{flops / 1e9:.1f} GFlop/s per rank")], bandwidth
+
+
+def _mult_floor(comm: MPI.Comm, M: PETSc.Mat, bandwidth: float) -> float:
+    """Seconds of one product with ``M`` at ``bandwidth``: the largest rank's nonzeros read."""
+    local = M.getInfo(PETSc.Mat.InfoType.LOCAL)["nz_used"]
+    return comm.allreduce(local, op=MPI.MAX) * AIJ_BYTES / bandwidth
 
 
 def _block_rows(comm: MPI.Comm, A: PETSc.Mat, P: PETSc.Mat, splits: list,
-                opts: dict[str, Any], repeats: int) -> list[dict[str, Any]]:
+                opts: dict[str, Any], repeats: int, bandwidth: float) -> list[dict[str, Any]]:
     """MatMult, set-up and one application of each block's preconditioner on its own."""
     rows = []
     for name, is_, nns in splits:
@@ -87,7 +143,8 @@ def _block_rows(comm: MPI.Comm, A: PETSc.Mat, P: PETSc.Mat, splits: list,
         x, y = M.createVecs()
         x.setRandom()
         mult = _timed(comm, lambda M=M, x=x, y=y: M.mult(x, y), repeats)
-        rows.append(_row(f"MatMult {name} block", M, None, mult))
+        rows.append(_row(f"MatMult {name} block", M, None, mult,
+                         floor=_mult_floor(comm, M, bandwidth)))
         ksp = _block_ksp(comm, M, f"floor_{name}_", name, opts)
         pc = ksp.getPC()
         set_up = _timed(comm, pc.setUp)
@@ -105,16 +162,18 @@ def measure_floors(pb: Any, repeats: int = 5, with_lu: bool = True) -> list[dict
     of the blocks ``p``, ``structure``, ``soil`` (collective).
     """
     comm = pb.comm
+    rows, bandwidth = _machine_rows(comm)
     pb.assemble_jacobian(force=True)
     solver = pb.linear_solver
     A, P = solver.A, solver.P if solver.P is not None else solver.A
     x, y = A.createVecs()
     x.setRandom()
-    rows = [_row("MatMult whole Jacobian", A, None,
-                 _timed(comm, lambda: A.mult(x, y), repeats))]
+    rows.append(_row("MatMult whole Jacobian", A, None,
+                     _timed(comm, lambda: A.mult(x, y), repeats),
+                     floor=_mult_floor(comm, A, bandwidth)))
     opts = merged_options("fieldsplit_pier")
     splits = pb.layout.splits(A, solver.spec.splits, pb.options.band_layers or 0)
-    rows += _block_rows(comm, A, P, splits, opts, repeats)
+    rows += _block_rows(comm, A, P, splits, opts, repeats, bandwidth)
     ksp = solver.ksp
     pc = ksp.getPC()
     def first() -> None:  # the blocks are set up at the first application
@@ -133,19 +192,30 @@ def measure_floors(pb: Any, repeats: int = 5, with_lu: bool = True) -> list[dict
     rows.append(_row("fieldsplit_pier: FGMRES solve (kept set-up)", A, None, solve,
                      ksp.getIterationNumber()))
     if with_lu:
-        rows.append(_lu_row(comm, A, x, y, repeats))
+        rows.append(_lu_row(comm, A, x, y, repeats, bandwidth))
     return rows
 
 
 def _lu_row(comm: MPI.Comm, A: PETSc.Mat, x: PETSc.Vec, y: PETSc.Vec,
-            repeats: int) -> dict[str, Any]:
-    """One factorisation of ``A`` with the options of ``direct_reuse`` and one solve with it."""
+            repeats: int, bandwidth: float) -> dict[str, Any]:
+    """One factorisation of ``A`` with the options of ``direct_reuse`` and one solve with it.
+
+    The solve's floor reads the largest rank's share of the effective (compressed) factor
+    entries once, 4 bytes each (the preset factorises in single precision); a rank's share is
+    its share of the uncompressed entries (``INFO(27)``).
+    """
     ksp = create_ksp(comm, A, None, "floor_lu_", "direct_reuse")
     pc = ksp.getPC()
     set_up = _timed(comm, pc.setUp)
     apply = _timed(comm, lambda: pc.apply(x, y), repeats)
+    F = pc.getFactorMatrix()
+    effective = mumps_count(F.getMumpsInfog(35))
+    local = mumps_count(F.getMumpsInfo(27))
+    share = comm.allreduce(local, op=MPI.MAX) / max(comm.allreduce(local), 1.0)
     ksp.destroy()
-    return _row("direct_reuse: block low-rank LU factorisation / one solve", A, set_up, apply)
+    return _row("direct_reuse: block low-rank LU factorisation / one solve", A, set_up, apply,
+                floor=effective * share * 4 / bandwidth,
+                rate=f"{effective:.3g} factor entries, {share:.0%} on the largest rank")
 
 
 def bench_floors(scenario: str, sets: Sequence[str] = (), out_dir: str | Path = "out/bench_floors",
