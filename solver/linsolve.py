@@ -35,11 +35,9 @@ Presets:
   docs/benchmarks.md ("Iterative preconditioners on the pier Jacobian").
 
 * ``fieldsplit_kept``: ``fieldsplit_pier`` whose structure block keeps its LU factorisation
-  across new Jacobians (``Preset.keep_blocks``): the piles and cap are linear, the band's soil
-  and the interface tangent change little, so one factorisation serves the run until a solve
-  needs more than 60 iterations; the pressure and soil blocks are set up with every matrix.
-  Full Pier 667 at h = 1 m: 2 set-ups of that block instead of 29, the run 17 % shorter, the
-  same answer (docs/benchmarks.md, "The full model: where the time goes").
+  across new Jacobians (``Preset.keep_blocks``) until a solve needs more than 60 iterations;
+  the pressure and soil blocks are set up with every matrix. Full Pier 667 at h = 1 m: 2
+  set-ups of that block instead of 29, the run 17 % shorter (docs/benchmarks.md).
 
 Every problem has its own options prefix; after each solve the converged reason is checked and
 a negative reason raises :class:`LinearSolveError` (a :class:`ConvergenceError`).
@@ -208,20 +206,16 @@ PRESETS: dict[str, Preset] = {
         fallback="direct_reuse",
     ),
 }
-PRESETS["direct_reuse_double"] = dataclasses.replace(
-    PRESETS["direct_reuse"], name="direct_reuse_double", fallback=None,
-    options={**PRESETS["direct_reuse"].options, "pc_precision": "double"})
 # the kept LU with its factors written uncompressed to files (icntl_35 = 3; compressed, MUMPS
 # kept them in memory), read back by every solve: docs/solver.md, docs/benchmarks.md
 PRESETS["direct_reuse_ooc"] = dataclasses.replace(
-    PRESETS["direct_reuse"], name="direct_reuse_ooc", out_of_core=True,
-    fallback="direct_reuse_ooc_double",
-    options={**PRESETS["direct_reuse"].options, "mat_mumps_icntl_22": 1,
-             "mat_mumps_icntl_35": 3})
-# its fallback stays out of core: the run took it because the in-core factors do not fit
-PRESETS["direct_reuse_ooc_double"] = dataclasses.replace(
-    PRESETS["direct_reuse_ooc"], name="direct_reuse_ooc_double", fallback=None,
-    options={**PRESETS["direct_reuse_ooc"].options, "pc_precision": "double"})
+    PRESETS["direct_reuse"], name="direct_reuse_ooc", fallback="direct_reuse_ooc_double",
+    out_of_core=True, options={**PRESETS["direct_reuse"].options, "mat_mumps_icntl_22": 1,
+                               "mat_mumps_icntl_35": 3})
+for _lu in ("direct_reuse", "direct_reuse_ooc"):  # their fallbacks: the same LU in double
+    PRESETS[f"{_lu}_double"] = dataclasses.replace(
+        PRESETS[_lu], name=f"{_lu}_double", fallback=None,
+        options={**PRESETS[_lu].options, "pc_precision": "double"})
 PRESETS["fieldsplit_kept"] = dataclasses.replace(
     PRESETS["fieldsplit_pier"], name="fieldsplit_kept", keep_blocks=("structure",), keep_its=60)
 
