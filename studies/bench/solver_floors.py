@@ -201,9 +201,11 @@ def _lu_row(comm: MPI.Comm, A: PETSc.Mat, x: PETSc.Vec, y: PETSc.Vec,
     """One factorisation of ``A`` with the options of ``direct_reuse`` and one solve with it.
 
     The solve's floor reads the largest rank's share of the effective (compressed) factor
-    entries once, 4 bytes each (the preset factorises in single precision); a rank's share is
-    its share of the uncompressed entries (``INFO(27)``).
+    entries once, 4 bytes each in single precision (the preset's, where this PETSc's MUMPS has
+    it) and 8 in double; a rank's share is its share of the uncompressed entries
+    (``INFO(27)``).
     """
+    word = 4 if merged_options("direct_reuse").get("pc_precision") == "single" else 8
     ksp = create_ksp(comm, A, None, "floor_lu_", "direct_reuse")
     pc = ksp.getPC()
     set_up = _timed(comm, pc.setUp)
@@ -214,7 +216,7 @@ def _lu_row(comm: MPI.Comm, A: PETSc.Mat, x: PETSc.Vec, y: PETSc.Vec,
     share = comm.allreduce(local, op=MPI.MAX) / max(comm.allreduce(local), 1.0)
     ksp.destroy()
     return _row("direct_reuse: block low-rank LU factorisation / one solve", A, set_up, apply,
-                floor=effective * share * 4 / bandwidth,
+                floor=effective * share * word / bandwidth,
                 rate=f"{effective:.3g} factor entries, {share:.0%} on the largest rank")
 
 

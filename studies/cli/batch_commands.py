@@ -12,7 +12,7 @@ import argparse
 import math
 import sys
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from pilegroup.errors import ScenarioError
 from pilegroup.model.loader import parse_override
@@ -64,6 +64,14 @@ def memory_size(text: str) -> float:
         raise argparse.ArgumentTypeError(
             f"{text[:40]!r}: allowed: a positive size with its unit, e.g. 8GB or 6000MB")
     return mb
+
+
+def _memory_argument(p: Any, default: str) -> None:
+    """``--memory SIZE`` on parser or group ``p``: the memory the cases may use together."""
+    p.add_argument("--memory", type=memory_size, default=None, metavar="SIZE",
+                   help=f"memory the cases may use together{default}, e.g. 8GB or 6000MB; each "
+                   "case gets the share of its ranks, and with preset auto a case whose in-core "
+                   "factors would exceed it writes them out of core")
 
 
 def _world_rank() -> int:
@@ -125,11 +133,7 @@ def batch_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--out", help="batch folder (default: out/<plan file stem>)")
     p.add_argument("--ranks-per-case", type=int, default=1, metavar="K",
                    help="MPI ranks of each case (must divide the number of ranks; default 1)")
-    p.add_argument("--memory", type=memory_size, default=None, metavar="SIZE",
-                   help="memory the cases may use together on each node, e.g. 8GB or 6000MB "
-                   "(default: what the node has available); each case gets the share of its "
-                   "ranks, and with preset auto a case whose in-core factors would exceed it "
-                   "writes them out of core")
+    _memory_argument(p, " on each node (default: what the node has available)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=_cmd_batch)
 
@@ -158,11 +162,7 @@ def combinations_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--ranks-per-case", type=int, default=1, metavar="K",
                    help="MPI ranks of each combination's run (must divide the number of ranks; "
                    "default 1)")
-    p.add_argument("--memory", type=memory_size, default=None, metavar="SIZE",
-                   help="memory the cases may use together on each node, e.g. 8GB or 6000MB "
-                   "(default: what the node has available); each case gets the share of its "
-                   "ranks, and with preset auto a case whose in-core factors would exceed it "
-                   "writes them out of core")
+    _memory_argument(p, " on each node (default: what the node has available)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=_cmd_combinations)
 
@@ -203,10 +203,7 @@ def study_arguments(p: argparse.ArgumentParser) -> None:
                    help="multiplier of interface.normal_stiffness_factor for the penalty check "
                    "(default 10; 1 skips it)")
     mem = m.add_mutually_exclusive_group()
-    mem.add_argument("--memory", type=memory_size, default=None, metavar="SIZE",
-                     help="memory the cases may use together, e.g. 8GB or 6000MB (default: the "
-                     "machine's memory); each case gets the share of its ranks, and with preset "
-                     "auto a case whose in-core factors would exceed it writes them out of core")
+    _memory_argument(mem, " (default: the machine's memory)")
     mem.add_argument("--memory-gb", type=float, default=None, metavar="GB",
                      help="the same in GB, a number without its unit")
     m.add_argument("--no-progress", action="store_true", help="no progress bar")
