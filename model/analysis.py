@@ -7,7 +7,7 @@ Validation happens when a dataclass is built (:mod:`pilegroup.validate`); errors
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from typing import Literal
 
 from pilegroup.errors import ScenarioError
@@ -250,52 +250,67 @@ class Time:
 
 @dataclass(frozen=True)
 class MeshOptions:
-    """Mesh sizing: quads in plan around the piles, extruded down through the layers."""
+    """Mesh sizing: quads in plan around the piles, extruded down through the layers.
 
-    size_m: float = 1.0
-    """Plan size of the elements next to the piles, m: h of the paper's mesh study."""
-    far_field_size_m: float = 8.0
-    """Plan size the elements grow to away from the piles, m."""
-    growth: float = 1.3
-    """Plan size growth ratio per element, in (1, 2]."""
-    n_circ_min: int = 32
-    """At least this many element edges around a pile (a multiple of 4, >= 8)."""
-    dz_surface_m: float = 0.5
-    """Vertical element size at the ground surface, m."""
-    dz_toe_m: float = 0.5
-    """Vertical element size at the pile toes, m."""
-    dz_max_m: float = 2.0
-    """Largest vertical element size down to the deepest toe, m."""
-    dz_max_deep_m: float = 4.0
-    """Largest vertical element size below the deepest toe, m.
-
-    It may exceed ``dz_max_m``: the bundled pier667 scenario uses 15 m here and 6 m above.
+    Every key is optional: a key left out (``None``) is chosen from the scenario when the
+    scenario is built (:mod:`pilegroup.model.mesh_defaults`); a :class:`Scenario
+    <pilegroup.model.scenario.Scenario>` always holds numbers, and ``automatic`` names the
+    keys it chose.
     """
-    dz_growth: float = 1.2
+
+    size_m: float | None = None
+    """Plan size of the elements next to the piles, m: h of the paper's mesh study."""
+    far_field_size_m: float | None = None
+    """Plan size the elements grow to away from the piles, m."""
+    growth: float | None = None
+    """Plan size growth ratio per element, in (1, 2]."""
+    n_circ_min: int | None = None
+    """At least this many element edges around a pile (a multiple of 4, >= 8)."""
+    dz_surface_m: float | None = None
+    """Vertical element size at the ground surface, m."""
+    dz_toe_m: float | None = None
+    """Vertical element size at the pile toes, m."""
+    dz_max_m: float | None = None
+    """Largest vertical element size down to the deepest toe, m."""
+    dz_max_deep_m: float | None = None
+    """Largest vertical element size below the deepest toe, m (may exceed ``dz_max_m``)."""
+    dz_growth: float | None = None
     """Vertical size growth ratio per element, in (1, 2]."""
-    dz_cap_m: float = 0.5
+    dz_cap_m: float | None = None
     """Vertical element size in the cap, m."""
-    min_layer_divisions: int = 2
+    min_layer_divisions: int | None = None
     """At least this many elements across every layer."""
+    automatic: tuple[str, ...] = field(default=(), metadata={"derived": True})
+    """The keys chosen automatically (set by the scenario; not a scenario key)."""
+
+    def given(self) -> dict[str, float | int]:
+        """The keys that hold a value, by name."""
+        return {f.name: getattr(self, f.name) for f in fields(self)
+                if not f.metadata.get("derived") and getattr(self, f.name) is not None}
 
     def __post_init__(self) -> None:
         for key in ("size_m", "far_field_size_m", "dz_surface_m", "dz_toe_m", "dz_max_m",
                     "dz_max_deep_m", "dz_cap_m"):
-            require_positive(key, getattr(self, key), "m")
-            check_bound(f"numerics.mesh.{key}", getattr(self, key))
-        if self.far_field_size_m < self.size_m:
+            if getattr(self, key) is not None:
+                require_positive(key, getattr(self, key), "m")
+                check_bound(f"numerics.mesh.{key}", getattr(self, key))
+        if (self.far_field_size_m is not None and self.size_m is not None
+                and self.far_field_size_m < self.size_m):
             raise ScenarioError("far_field_size_m", self.far_field_size_m,
                                 f"must be >= size_m = {self.size_m:g}", "m")
         for key in ("growth", "dz_growth"):
-            require_in_range(key, getattr(self, key), 1.0, 2.0, "-", lo_open=True)
-        if self.n_circ_min < 8 or self.n_circ_min % 4:
-            raise ScenarioError("n_circ_min", self.n_circ_min,
-                                "must be a multiple of 4, >= 8", "-")
-        check_bound("numerics.mesh.n_circ_min", self.n_circ_min)
-        if self.min_layer_divisions < 1:
-            raise ScenarioError("min_layer_divisions", self.min_layer_divisions,
-                                "must be an integer >= 1", "-")
-        check_bound("numerics.mesh.min_layer_divisions", self.min_layer_divisions)
+            if getattr(self, key) is not None:
+                require_in_range(key, getattr(self, key), 1.0, 2.0, "-", lo_open=True)
+        if self.n_circ_min is not None:
+            if self.n_circ_min < 8 or self.n_circ_min % 4:
+                raise ScenarioError("n_circ_min", self.n_circ_min,
+                                    "must be a multiple of 4, >= 8", "-")
+            check_bound("numerics.mesh.n_circ_min", self.n_circ_min)
+        if self.min_layer_divisions is not None:
+            if self.min_layer_divisions < 1:
+                raise ScenarioError("min_layer_divisions", self.min_layer_divisions,
+                                    "must be an integer >= 1", "-")
+            check_bound("numerics.mesh.min_layer_divisions", self.min_layer_divisions)
 
 
 @dataclass(frozen=True)
@@ -387,15 +402,23 @@ class Numerics:
     (:func:`pilegroup.geometry.adapter.resolve_geometry`). A plane must be one the pile layout
     and the cap are mirror-symmetric about (the block is centred by construction, the loads are
     uniform on the cap top or the pile heads).
+
+    ``element``: ``Q1Q1`` (trilinear displacement and pressure, stabilised), ``Q2Q1``
+    (triquadratic displacement, Taylor–Hood) or ``auto`` (default): Q1Q1 when every action is
+    vertical, Q2Q1 when a load stage has a horizontal force or a moment
+    (:mod:`pilegroup.model.mesh_defaults`). A :class:`Scenario
+    <pilegroup.model.scenario.Scenario>` always holds the resolved pair.
     """
 
-    element: Literal["Q2Q1", "Q1Q1"] = "Q2Q1"
+    element: Literal["auto", "Q2Q1", "Q1Q1"] = "auto"
     newton_rtol: float = 1.0e-8
     newton_atol: float = 1.0e-9
     symmetry: Literal["auto", "none", "quarter", "half_x", "half_y"] = "auto"
     mesh: MeshOptions = field(default_factory=MeshOptions)
     time: TimeStepping = field(default_factory=TimeStepping)
     solver: LinearSolver = field(default_factory=LinearSolver)
+    element_reason: str = field(default="", metadata={"derived": True})
+    """Why the scenario holds its element pair (set by the scenario; not a scenario key)."""
 
     def __post_init__(self) -> None:
         for key in ("newton_rtol", "newton_atol"):

@@ -24,7 +24,7 @@ from pilegroup.model.scenario import Scenario
 
 #: Scenarios shipped with the package (``pilegroup scenario show NAME``).
 BUNDLED = ("pier667", "pier667_downdrag", "group3x3_downdrag", "single_pile",
-           "pier667_lateral")
+           "pier667_lateral", "group2x3_lateral")
 _INDEXED = re.compile(r"([A-Za-z_][A-Za-z0-9_]*)\[(\d+)\]")
 
 
@@ -110,7 +110,8 @@ def build_dataclass[T](cls: type[T], data: object, key: str = "") -> T:
     if not isinstance(data, dict):
         raise ScenarioError(key or cls.__name__, data, "must be a table")
     hints = get_type_hints(cls)
-    fields = {f.name: f for f in dataclasses.fields(cls)}
+    # fields marked ``derived`` are set by the scenario itself, never read from a file
+    fields = {f.name: f for f in dataclasses.fields(cls) if not f.metadata.get("derived")}
     prefix = f"{key}." if key else ""
     for k in data:
         if k not in fields:

@@ -24,6 +24,7 @@ from pilegroup.model.analysis import (
     Stage,
     Time,
 )
+from pilegroup.model.mesh_defaults import describe, locking_warning, resolve_numerics
 from pilegroup.model.mesh_estimate import MAX_CELLS, estimated_cells
 from pilegroup.model.site import Cap, Layer, Piles, Site, Structure
 from pilegroup.model.units import GAMMA_WATER
@@ -49,6 +50,7 @@ class Scenario:
     description: str = ""
 
     def __post_init__(self) -> None:
+        self._resolve_numerics()
         self._check_layer_stack()
         self._check_plan()
         self._check_cap()
@@ -59,6 +61,41 @@ class Scenario:
         self._check_gauges()
         self._check_numerics()
         self._check_actions()
+
+    def _resolve_numerics(self) -> None:
+        """The element pair and every mesh size the scenario leaves out, chosen from it.
+
+        :func:`pilegroup.model.mesh_defaults.resolve_numerics`.
+        """
+        object.__setattr__(self, "numerics", resolve_numerics(self, self.locking_reason()))
+
+    def locking_reason(self) -> str | None:
+        """Why trilinear hexahedra (Q1Q1) would lock in this scenario, or None.
+
+        They lock in bending (horizontal forces or moments on the foundation: ``verify
+        lateral-single-pile``, 18 % too stiff) and under isochoric plastic flow (a capacity
+        stage in a Mohr–Coulomb or Drucker–Prager soil: the load–settlement curve never
+        flattens, docs/model.md, "Capacity").
+        """
+        if self.has_lateral_actions():
+            return "horizontal actions bend the piles"
+        if self.capacity_stage is not None and self.soil.model != "linear_elastic":
+            return "a capacity stage drives the plastic soil to failure"
+        return None
+
+    def discretisation(self) -> dict[str, object]:
+        """The element pair and mesh sizes the run uses, with where each came from."""
+        m = self.numerics.mesh
+        return {"element": self.numerics.element, "element_reason": self.numerics.element_reason,
+                "mesh": m.given(), "automatic": list(m.automatic)}
+
+    def discretisation_line(self) -> str:
+        """The element pair and mesh sizes in one line (automatic sizes marked ``*``)."""
+        return describe(self.numerics)
+
+    def discretisation_warning(self) -> str | None:
+        """One line when the element pair is known to be inaccurate for the scenario."""
+        return locking_warning(self.numerics, self.locking_reason())
 
     # ---- rules across the parts, in the order the messages report them ----
     def _check_layer_stack(self) -> None:

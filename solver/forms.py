@@ -9,9 +9,9 @@ units kN, m, day; tension positive; ``p`` excess pore pressure, compression posi
   quadrature-point state;
 * mass balance, backward Euler (multiplied by dt):
   ``S (p - p_n) + div(u - u_n) - dt div((k/GAMMA_W) grad p) = 0``, ``S = n / K_w``;
-* pressure stabilisation of Q1-Q1 (Bochev, Dohrmann & Gunzburger 2006; White & Borja 2008):
-  ``tau int (dp - Pi0 dp)(q - Pi0 q)`` as the full-quadrature minus the one-point mass matrix,
-  ``tau = 3 / (lambda + 2 mu)`` per soil material (:func:`projection_tau`);
+* pressure stabilisation of Q1-Q1: ``tau int (J J^T / 12) grad(p - p_n) . grad q``, a
+  pressure Laplacian in each cell's own metric (``J`` the Jacobian of the map from the unit
+  cube), ``tau = 3 / (lambda + 2 mu)`` per soil material (:func:`projection_tau`);
 * surface loads: ``int c n . v`` with a Constant pressure per load;
 * interface: the law's effective traction plus the excess pore pressure on the pile surfaces;
 * fixed-stress preconditioning term ``(1/K_dr) M`` on the pressure block.
@@ -99,14 +99,9 @@ def projection_tau(K: float, G: float) -> float:
     with ``beta = h^2 / (4 (lambda + 2 mu))``. In 1D the undrained pressure operator is
     ``1/(lambda + 2 mu)`` times the one-point mass matrix (the strain is constant per cell);
     with ``beta`` it becomes ``1/(lambda + 2 mu)`` times the lumped mass matrix, an M-matrix,
-    and the pressure is monotone at any time step. On a trilinear hexahedron (box cell of sides
-    ``h_x, h_y, h_z``) a pressure varying in one direction ``n`` only (the boundary layer at a
-    drained face, the oedometric column) makes the projection term exactly
-    ``tau (h_n^2 / 12) int grad(p - p_n) . grad q``, and with no lateral strain the trilinear
-    problem is that 1D one with the constrained modulus ``lambda + 2 mu``: ``tau h_n^2 / 12 =
-    beta`` gives ``tau = 3 / (lambda + 2 mu)``, with no cell size (the projection carries
-    ``h_n``). Modes varying in two or three directions inside a cell get ``h^2/24`` and
-    ``h^2/36`` of their Laplacian instead (docs/solver.md: derivation and measurements).
+    and the pressure is monotone at any time step. The term of :meth:`FormBuilder.stabilisation`
+    is ``tau (h_n^2 / 12)`` in each direction ``n`` of a box cell, so ``tau h_n^2 / 12 = beta``
+    gives ``tau = 3 / (lambda + 2 mu)`` with each direction's own cell size (docs/solver.md).
     """
     return 3.0 / (K + 4.0 * G / 3.0)
 
@@ -249,19 +244,22 @@ class FormBuilder:
         return c.mob_h * (gp[0] * gq[0] + gp[1] * gq[1]) + c.mob * gp[2] * gq[2]
 
     def stabilisation(self) -> None:
-        """Polynomial pressure projection of the equal-order pair (full minus one-point mass).
+        """Pressure stabilisation of the equal-order pair: a Laplacian in the cell's metric.
 
-        ``tau int (dp - Pi0 dp)(q - Pi0 q)`` on the soil cells with the cell-wise ``tau`` of
-        :func:`projection_tau` (a monotone 1D pressure in a drained step of any size).
+        ``tau int (J J^T / 12) grad(p - p_n) . grad q`` on the soil cells, ``J`` the Jacobian
+        of the map from the unit cube (its columns are the cell's edge vectors), ``tau`` of
+        :func:`projection_tau`. On a box cell of sides ``h_x, h_y, h_z`` it is
+        ``tau (h_i^2 / 12) int d_i p d_i q`` in each direction: Rodrigo et al.'s
+        ``beta = h^2 / (4 (lambda + 2 mu))`` with each direction's own ``h`` (a monotone 1D
+        pressure in a drained step of any size). It is positive semi-definite on every cell,
+        graded, stretched or not a parallelepiped (docs/solver.md, "Q1-Q1 stabilisation").
         """
         lay, tau, q, dp = self.layout, self.coef.tau, self.q, self.dp
-        sd = dict(subdomain_data=lay.md.cell_tags, subdomain_id=lay.soil_tags) \
-            if lay.has_solids else {}
-        dx_full = ufl.Measure("dx", domain=lay.mesh, metadata={"quadrature_degree": 2}, **sd)
-        dx_one = ufl.Measure("dx", domain=lay.mesh, metadata={"quadrature_degree": 1}, **sd)
+        J = ufl.Jacobian(lay.mesh)
+        metric = J * J.T / 12.0
         dpn = lay.p - lay.p_n
-        self.forms.add_F(1, tau * dpn * q * dx_full - tau * dpn * q * dx_one)
-        self.forms.add_J(1, 1, tau * dp * q * dx_full - tau * dp * q * dx_one)
+        self.forms.add_F(1, tau * ufl.inner(metric * ufl.grad(dpn), ufl.grad(q)) * self.dx)
+        self.forms.add_J(1, 1, tau * ufl.inner(metric * ufl.grad(dp), ufl.grad(q)) * self.dx)
 
     def interface(self, itf: NodalInterface) -> None:
         """Interface traction (law + excess pore pressure) between structure and soil.

@@ -119,6 +119,10 @@ def _cmd_scenario_validate(args: argparse.Namespace) -> int:
     if _world_rank() == 0:
         print(f"{args.file}: valid scenario {sc.name!r}: {len(sc.layers)} layers, "
               f"{sc.piles.count} piles, {len(sc.stages)} stages, end {sc.time.end_day:g} day")
+        print(f"  {sc.discretisation_line()}")
+        warning = sc.discretisation_warning()
+        if warning:
+            print(f"warning: {warning}", file=sys.stderr)
     return 0
 
 

@@ -84,6 +84,9 @@ class JobSummary(TypedDict, total=False):
     solver: RunSummary | None
     """Complete: the run summary (None when stopped after meshing)."""
     mesh: MeshRecord
+    discretisation: dict[str, Any]
+    """Complete: the element pair, why, and every mesh size (``automatic``: those chosen
+    from the scenario, :meth:`pilegroup.model.scenario.Scenario.discretisation`)."""
     ranks: int
     wall_s: float
     reason: str

@@ -58,8 +58,11 @@ def run_scenario(sc: Scenario, out: Path, mesh_size: float | None = None,
     """
     t0 = time.perf_counter()
     if mesh_size is not None:
+        mesh = sc.numerics.mesh
         sc = dataclasses.replace(sc, numerics=dataclasses.replace(
-            sc.numerics, mesh=dataclasses.replace(sc.numerics.mesh, size_m=mesh_size)))
+            sc.numerics, mesh=dataclasses.replace(
+                mesh, size_m=mesh_size,
+                automatic=tuple(k for k in mesh.automatic if k != "size_m"))))
     if resume and stop_after != "solve":
         raise ScenarioError("--stop-after", stop_after, "only 'solve' with --resume")
     with folder_lock(out, comm):
@@ -77,6 +80,11 @@ def _locked_run(sc: Scenario, out: Path, stop_after: str, comm: MPI.Comm, resume
                 log.info("the run in %s is complete (t = %g day); nothing to resume", out,
                          manifest["t_day"])
             return done
+    if comm.rank == 0:
+        log.info("discretisation: %s", sc.discretisation_line())
+        warning = sc.discretisation_warning()
+        if warning:
+            log.warning("%s", warning)
     geo = resolve_geometry(sc)  # the one resolution of the scenario's geometry in a run
     # before anything is written or meshed
     memory = memory_check(sc, geo, comm, force, memory_mb)
@@ -117,6 +125,7 @@ def _run(sc: Scenario, geo: ResolvedGeometry, out: Path, stop_after: str, comm: 
         "solver": solved,
         "mesh": {k: mesh[k] for k in ("h_m", "cells", "vertices", "min_scaled_jacobian",
                                       "shaft_groups", "files")},
+        "discretisation": sc.discretisation(),
         "ranks": comm.size,
         "wall_s": time.perf_counter() - t0,
     }

@@ -44,7 +44,12 @@ from pilegroup.errors import MachineTooSmall
 from pilegroup.fileio import proc_kib
 from pilegroup.geometry.adapter import ResolvedGeometry
 from pilegroup.model import Scenario
-from pilegroup.model.mesh_estimate import SAFETY, estimated_cells
+from pilegroup.model.mesh_estimate import (
+    SAFETY,
+    UNKNOWNS_PER_VERTEX,
+    VERTICES_PER_CELL,
+    estimated_cells,
+)
 from pilegroup.studies.run.auto_preset import scenario_preset
 
 log = logging.getLogger(__name__)
@@ -52,10 +57,6 @@ log = logging.getLogger(__name__)
 #: Peak resident memory of one rank of a tiny run (Python, DOLFINx, PETSc, gmsh loaded), MB:
 #: 602 MB measured for the 198-cell single pile of the test suite.
 BASE_MB = 600.0
-#: Vertices per hexahedron of the graded meshes (1.11 for the pier, more for small meshes).
-VERTICES_PER_CELL = 1.15
-#: Unknowns per vertex: 3 displacements (Q2: ~8 nodes per vertex) and 1 pressure.
-UNKNOWNS_PER_VERTEX = {"Q1Q1": 4, "Q2Q1": 25}
 
 #: (unknowns, peak MB of the largest of 2 ranks) per solver family, docs/benchmarks.md: the
 #: double-precision LU (``direct_reuse_double``; quarter pier 1 m and 0.1 m with block

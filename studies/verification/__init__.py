@@ -18,6 +18,8 @@ the tolerance and the source of the reference. Modules:
   actions, the whole run pipeline);
 * ``capacity_cases``: ``pile-capacity`` (a capacity stage, shaft plus toe, the whole run
   pipeline);
+* ``undrained_cases``: ``undrained-loading`` (a uniform fill, undrained, on the meshes of
+  bundled and random layouts, the whole run pipeline);
 * ``runner``: :func:`run_cases` and :func:`main`
   (``python -m pilegroup.studies.verification [CASE ...] [--size fast|bench] [--json]``,
   also under ``mpirun -n 2``; ``pilegroup verify``).
@@ -35,6 +37,7 @@ from pilegroup.studies.verification import (  # noqa: F401
     radial_cases,
     lateral_cases,
     capacity_cases,
+    undrained_cases,
 )
 # isort: on
 

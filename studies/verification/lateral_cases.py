@@ -12,9 +12,11 @@ Soil linear elastic and drained (permeable, loaded over a day), piles and cap co
   ``u = (E_p/G*)^(1/7) / G* [0.27 H (l_c/2)^-1 + 0.30 M (l_c/2)^-2]``,
   ``theta = (E_p/G*)^(1/7) / G* [0.30 H (l_c/2)^-2 + 0.80 M (l_c/2)^-3]``, with
   ``G* = G (1 + 3 nu / 4)`` and ``l_c = d (E_p/G*)^(2/7)``; the H–theta and M–u terms share
-  their coefficient (Betti's reciprocity). Tolerance 15 %: Randolph fitted his own finite
-  element runs to about 10 %; our block is finite (30 m x 30 m, 25 m deep, rollers on the
-  sides, fixed bottom: stiffer than the half-space) and its mesh has a finite size.
+  their coefficient (Betti's reciprocity). The scenario has no ``[numerics]``: the default
+  discretisation (Q2Q1 for horizontal actions, the automatic mesh). Tolerance 5 %: Randolph
+  fitted his own finite element runs to about 10 %; Q2Q1 converges to about 4.5 % below his
+  deflection and 4.5 % above his rotation (docs/model.md, "Cap actions"); the block (40 m x
+  40 m, 30 m deep, rollers on the sides, fixed bottom) is stiffer than the half-space.
 * ``cap-equilibrium``: a 3 x 3 group under a cap, the piles joined to the soil by the elastic
   interface, under all six actions at once about a point off the cap centre: the pile heads'
   forces and moments, moved to that point, balance the applied actions, every component, to
@@ -38,6 +40,7 @@ from typing import Any
 import numpy as np
 from mpi4py import MPI
 
+from pilegroup.model import scenario_from_dict
 from pilegroup.studies.results.tables import CAP_MOTION_CSV, HEADS_CSV, Table
 from pilegroup.studies.verification.common import run_pipeline, world
 from pilegroup.studies.verification.registry import CaseResult, register
@@ -102,23 +105,19 @@ def lateral_scenario(case: str, size: str = "fast") -> dict[str, Any]:
         "time": {"end_day": 2.0, "output_days": [0.0, 1.0, 2.0]},
         "outputs": {"xdmf": False, "plots": False},
     }
-    if case == "single":
-        hp = 0.3 * h
+    if case == "single":  # the default discretisation; bench: half its sizes at the pile
+        fine = {"size_m": D_LAT / 2, "dz_surface_m": D_LAT / 2, "dz_toe_m": D_LAT / 2}
         return common | {
             "scenario": {"name": "lateral_single_pile"},
-            "site": {"size_x_m": 30.0, "size_y_m": 30.0, "depth_m": 25.0},
+            "site": {"size_x_m": 40.0, "size_y_m": 40.0, "depth_m": 30.0},
             "piles": {"diameter_m": D_LAT, "length_in_soil_m": L_LAT, "grid": [1, 1]},
             "interface": {"mode": "tied"},
             "stages": [{"name": "geostatic", "kind": "geostatic"},
                        {"name": "head", "kind": "load", "cap_load_kN": 0.0, "Fx_kN": H_LAT,
                         "My_kNm": M_LAT, "duration_day": 1.0},
                        {"name": "drained", "kind": "consolidation"}],
-            "numerics": {"element": "Q2Q1",
-                         "mesh": {"size_m": hp, "far_field_size_m": 4.0, "n_circ_min": 16,
-                                  "dz_surface_m": hp, "dz_toe_m": 2 * hp, "dz_max_m": 1.0,
-                                  "dz_max_deep_m": 4.0}},
             "layers": [_soil("clay")],
-        }
+        } | ({"numerics": {"mesh": fine}} if size == "bench" else {})
     if case == "equilibrium":
         loads = [{"name": "actions", "kind": "load", "duration_day": 1.0} | GROUP_ACTIONS]
     else:  # the bases stay in compression under the vertical load; the moment comes after
@@ -154,16 +153,17 @@ def _last(table: Table) -> dict[str, np.ndarray]:
 
 @register("lateral-single-pile")
 def lateral_single_pile(size: str = "fast", comm: MPI.Comm | None = None) -> CaseResult:
-    """Head deflection and rotation of a flexible pile against Randolph (1981), 15 %."""
+    """Head deflection and rotation of a flexible pile against Randolph (1981), 5 %."""
     comm = comm or world()
     t0 = time.perf_counter()
-    tables, n = run_pipeline(lateral_scenario("single", size), comm, (CAP_MOTION_CSV,))
+    doc = lateral_scenario("single", size)
+    tables, n = run_pipeline(doc, comm, (CAP_MOTION_CSV,))
     motion = _last(tables[CAP_MOTION_CSV])
     u, theta = float(motion["ux_m"][0]), float(motion["ry_rad"][0])
     G = E_SOIL / (2.0 * (1.0 + NU_SOIL))
     u_ref, t_ref, lc = randolph_head(H_LAT, M_LAT, D_LAT, E_PILE, G, NU_SOIL)
     err_u, err_t = abs(u - u_ref) / u_ref, abs(theta - t_ref) / t_ref
-    tol = 0.15
+    tol = 0.05
     return CaseResult(
         "lateral-single-pile", max(err_u, err_t), tol, bool(max(err_u, err_t) <= tol),
         time.perf_counter() - t0, n["dofs"], n["newton"], n["steps"],
@@ -172,7 +172,7 @@ def lateral_single_pile(size: str = "fast", comm: MPI.Comm | None = None) -> Cas
         details={"u_m": u, "u_ref_m": u_ref, "theta_rad": theta, "theta_ref_rad": t_ref,
                  "u_error": err_u, "theta_error": err_t, "critical_length_m": lc,
                  "stiffer_by": {"u": 1.0 - u / u_ref, "theta": 1.0 - theta / t_ref},
-                 "ranks": comm.size})
+                 "element": scenario_from_dict(doc).numerics.element, "ranks": comm.size})
 
 
 def head_resultant(heads: dict[str, np.ndarray], point: tuple[float, float, float]

@@ -62,9 +62,10 @@ def scenario(name):
         d["cap"], d["piles"]["embedment_m"] = cap, 0.5
         d["interface"]["mode"] = "tied"  # a cap bonded to the ground
     d["outputs"].pop("gauge_depths_m")
-    d["numerics"]["mesh"] = {"size_m": 1.0, "far_field_size_m": 8.0, "n_circ_min": N,
-                             "dz_surface_m": 2.0, "dz_toe_m": 1.0, "dz_max_m": 4.0,
-                             "dz_max_deep_m": 8.0}
+    d["numerics"] = {"element": "Q1Q1", "mesh": {
+        "size_m": 1.0, "far_field_size_m": 8.0, "n_circ_min": N, "growth": 1.3,
+        "dz_surface_m": 2.0, "dz_toe_m": 1.0, "dz_max_m": 4.0, "dz_max_deep_m": 8.0,
+        "dz_growth": 1.2, "dz_cap_m": 0.5}}
     return scenario_from_dict(d)
 
 

@@ -84,7 +84,7 @@ def test_symmetry_follows_the_surcharge_area():
     assert geo.symmetry == "half_y"
     assert "surcharge stage 'fill' spans x = 10 .. 30 m" in geo.reason
     data = _with([beside])
-    data["numerics"]["symmetry"] = "quarter"
+    data.setdefault("numerics", {})["symmetry"] = "quarter"
     with pytest.raises(ScenarioError, match="cuts at x = 0, but the load is not mirror"):
         resolve_geometry(scenario_from_dict(data))
 

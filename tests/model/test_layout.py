@@ -225,7 +225,7 @@ def test_gauges_lie_on_the_shortest_pile():
 
 def test_mesh_size_resolves_the_thinnest_pile():
     d = _doc([TWO[0], dict(TWO[1], diameter_m=0.15)])
-    d["numerics"]["mesh"]["size_m"] = 1.0
+    d.setdefault("numerics", {}).setdefault("mesh", {})["size_m"] = 1.0
     err = _error(d)
     assert err.key == "numerics.mesh.size_m"
     assert "5 x piles.layout[1].diameter_m = 0.75" in str(err)

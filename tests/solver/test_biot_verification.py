@@ -20,7 +20,8 @@ def test_cases_are_registered_in_run_order():
                                "interface-patch", "tied-limit", "consolidation-surcharge",
                                "downdrag-end-bearing", "downdrag-floating",
                                "radial-consolidation", "lateral-single-pile",
-                               "cap-equilibrium", "rigid-cap-moment", "pile-capacity"]
+                               "cap-equilibrium", "rigid-cap-moment", "pile-capacity",
+                               "undrained-loading"]
 
 
 def test_registry_passes_only_accepted_overrides(monkeypatch):

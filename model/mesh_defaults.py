@@ -1,0 +1,175 @@
+"""The automatic discretisation: every ``numerics`` key a scenario leaves out, from the scenario.
+
+Most scenarios never write ``[numerics]``; what they get is this module's choice, and the
+bundled scenarios use it too (docs/model.md, "The default discretisation").
+
+Element pair (``numerics.element = "auto"``): the stabilised equal-order pair ``Q1Q1`` when
+every action on the foundation is vertical, ``Q2Q1`` (Taylor–Hood) when a load stage carries a
+horizontal force or a moment: trilinear hexahedra lock in bending (``verify
+lateral-single-pile``: 18 % too stiff), quadratic ones do not.
+
+Mesh sizes (``numerics.mesh``), for the largest pile diameter ``d``, the longest pile ``L``, the
+block's smaller plan side ``W`` and depth ``D`` (the rules reproduce the sizes the Pier 667 mesh
+study validated, docs/results.md):
+
+* ``size_m = d`` next to the piles, at most the clear gap between two piles;
+* ``n_circ_min = 28`` edges around a pile (meshed area 99.2 % of the circle's);
+* ``far_field_size_m = min(W / 4, 16 d)``, ``growth = 1.6`` in plan;
+* ``dz_surface_m = dz_toe_m = max(d, L / 80)``, ``dz_max_m = min(max(6 d, L / 20), L / 10)``
+  along the piles,
+  ``dz_max_deep_m = min(15 d, (D - L) / 4, W / 4)`` below the toes, ``dz_growth = 1.4``;
+* ``dz_cap_m = min(1.5 d, cap thickness)``; ``min_layer_divisions = 2`` (every layer at least
+  two elements thick, so thin layers set their own sizes).
+
+Memory budget: when the whole model's estimated unknowns (:func:`estimated_unknowns`) exceed
+:data:`UNKNOWN_BUDGET`, the automatic sizes coarsen step by step (:data:`STEPS`: longer
+elements, fewer edges around a pile, one element layer across a thin layer) until they fit: a
+default run fits a 2-core, 24 GB machine for groups up to 6 x 6 of any diameter
+(``tests/model/test_mesh_defaults.py``). Keys the scenario gives are kept as given.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from collections.abc import Mapping
+from dataclasses import replace
+
+from pilegroup.model.analysis import MeshOptions, Numerics
+from pilegroup.model.mesh_estimate import EstimatedScenario, estimated_unknowns
+
+#: Why the equal-order pair is the default where nothing locks.
+Q1Q1_REASON = ("auto: every action is vertical and the soil stays in its elastic range or "
+               "has no plastic flow to lock")
+
+#: Whole-model unknowns a default mesh may have (before symmetry reduction): the full Pier 667
+#: at h = 0.1 m (623,988 unknowns) ran in 14.6 GB on 2 ranks with the kept LU.
+UNKNOWN_BUDGET = 600_000
+#: Edges around a pile.
+N_CIRC = 28
+#: Growth ratios in plan and in depth.
+GROWTH, DZ_GROWTH = 1.6, 1.4
+#: Coarsening steps tried in order until the estimate fits: (factor on the automatic lengths,
+#: edges around a pile, least element layers across a layer). The first is the nominal mesh.
+STEPS = ((1.0, N_CIRC, 2), (1.25, 24, 2), (1.5, 20, 2), (2.0, 16, 2), (2.0, 16, 1),
+         (2.5, 12, 1), (3.0, 12, 1), (4.0, 12, 1))
+#: Largest automatic sizes (m): the validator's bounds (size_m also <= 5 x the thinnest pile).
+SIZE_MAX, FAR_MAX, DZ_MAX = 10.0, 200.0, 100.0
+
+#: The length keys the budget scales.
+LENGTHS = ("size_m", "far_field_size_m", "dz_surface_m", "dz_toe_m", "dz_max_m",
+           "dz_max_deep_m", "dz_cap_m")
+
+
+def nominal_sizes(sc: EstimatedScenario) -> dict[str, float | int]:
+    """The automatic sizes of every ``numerics.mesh`` key before the memory budget (m, -)."""
+    d = max(sc.piles.diameters)
+    length = max(sc.piles.lengths)
+    width = min(sc.site.size_x_m, sc.site.size_y_m)
+    size = d
+    xy = sc.piles.xy
+    for (i, a), (j, b) in itertools.combinations(enumerate(xy), 2):
+        gap = math.dist(a, b) - (sc.piles.diameters[i] + sc.piles.diameters[j]) / 2
+        if gap > 0:
+            size = min(size, gap)
+    far = max(size, min(width / 4, 16 * d))
+    dz = max(d, length / 80)  # a slender pile needs no elements as short as its diameter
+    out: dict[str, float | int] = {
+        "size_m": size, "far_field_size_m": far, "growth": GROWTH, "n_circ_min": N_CIRC,
+        "dz_surface_m": dz, "dz_toe_m": dz, "dz_max_m": max(dz, min(max(6 * d, length / 20),
+                                                                    length / 10)),
+        "dz_max_deep_m": max(d, min(15 * d, (sc.site.depth_m - length) / 4, width / 4)),
+        "dz_growth": DZ_GROWTH, "min_layer_divisions": 2,
+        "dz_cap_m": d if sc.cap is None else min(1.5 * d, sc.cap.thickness_m),
+    }
+    return out
+
+
+def resolve_mesh(sc: EstimatedScenario, given: Mapping[str, float | int], element: str
+                 ) -> tuple[dict[str, float | int], int]:
+    """Every ``numerics.mesh`` key: ``given`` ones kept, the others automatic within budget.
+
+    Returns the sizes and the index of the :data:`STEPS` entry they come from (0: the nominal
+    sizes fit :data:`UNKNOWN_BUDGET`; the last one when nothing fits, which the memory check
+    then reports).
+    """
+    nominal = nominal_sizes(sc)
+    if max(sc.piles.lengths) >= sc.site.depth_m:  # the scenario refuses it, with its reason
+        return {**nominal, **given}, 0
+    size_max = min(SIZE_MAX, 5.0 * min(sc.piles.diameters))
+    step = 0
+    for step, (factor, n_circ, divisions) in enumerate(STEPS):  # noqa: B007 - returned
+        sizes = dict(nominal, n_circ_min=n_circ, min_layer_divisions=divisions)
+        for k in LENGTHS:
+            sizes[k] = min(nominal[k] * factor, DZ_MAX)
+        sizes["size_m"] = min(sizes["size_m"], size_max)
+        sizes["far_field_size_m"] = min(sizes["far_field_size_m"], FAR_MAX)
+        sizes.update(given)
+        # automatic sizes keep the given ones valid: h next to the piles <= the far field's
+        if "size_m" not in given:
+            sizes["size_m"] = min(sizes["size_m"], sizes["far_field_size_m"])
+        sizes["far_field_size_m"] = max(sizes["far_field_size_m"], sizes["size_m"])
+        if estimated_unknowns(_with_mesh(sc, sizes, element)) <= UNKNOWN_BUDGET:
+            break
+    return sizes, step
+
+
+class _Sized:
+    """A view of a scenario with other numerics (what the estimate reads)."""
+
+    def __init__(self, sc: EstimatedScenario, numerics: Numerics) -> None:
+        self.site, self.layers, self.piles, self.cap = sc.site, sc.layers, sc.piles, sc.cap
+        self.numerics = numerics
+
+
+def _with_mesh(sc: EstimatedScenario, sizes: Mapping[str, float | int], element: str
+               ) -> _Sized:
+    mesh = MeshOptions(**sizes)  # type: ignore[arg-type]
+    return _Sized(sc, replace(sc.numerics, mesh=mesh, element=element))
+
+
+def resolve_numerics(sc: EstimatedScenario, locking: str | None) -> Numerics:
+    """``sc.numerics`` with its element pair and every mesh size resolved.
+
+    ``numerics.element = "auto"``: Q2Q1 where trilinear hexahedra lock (``locking``, the
+    scenario's reason, or None) and the Q2Q1 model fits :data:`UNKNOWN_BUDGET` at the
+    automatic sizes; else Q1Q1. A scenario made from a resolved one (``dataclasses.replace``)
+    chooses its automatic keys and an automatic element again, for what it now holds.
+    """
+    num = sc.numerics
+    given = {k: v for k, v in num.mesh.given().items() if k not in num.mesh.automatic}
+    element, reason = num.element, "numerics.element"
+    if element == "auto" or num.element_reason.startswith("auto"):
+        element, reason = "Q1Q1", Q1Q1_REASON
+        if locking is not None:
+            if resolve_mesh(sc, given, "Q2Q1")[1] == 0:
+                element, reason = "Q2Q1", f"auto: {locking}"
+            else:
+                reason = (f"auto: {locking}, but Q2Q1 exceeds the memory budget "
+                          f"({UNKNOWN_BUDGET:,} unknowns) at the automatic mesh sizes")
+    sizes, _ = resolve_mesh(sc, given, element)
+    automatic = tuple(k for k in sizes if k not in given)
+    mesh = MeshOptions(**sizes, automatic=automatic)  # type: ignore[arg-type]
+    return replace(num, element=element, mesh=mesh, element_reason=reason)
+
+
+def describe(num: Numerics) -> str:
+    """The element pair and mesh sizes in one line (automatic sizes marked ``*``)."""
+    m = num.mesh
+    sizes = ", ".join(f"{k} = {v:.4g}{'*' if k in m.automatic else ''}"
+                      for k, v in m.given().items())
+    return f"element {num.element} ({num.element_reason}); mesh {sizes} (* automatic)"
+
+
+def locking_warning(num: Numerics, locking: str | None) -> str | None:
+    """One line when Q1Q1 is used where trilinear hexahedra lock (``locking``: why)."""
+    if num.element != "Q1Q1" or locking is None:
+        return None
+    return (f"numerics.element = 'Q1Q1' where {locking}: trilinear hexahedra lock (too stiff: "
+            "head deflection about 18 % too small in verify lateral-single-pile; a "
+            "load-settlement curve that never plunges); 'Q2Q1' is accurate where it fits the "
+            f"machine ({num.element_reason})")
+
+
+__all__ = ["LENGTHS", "Q1Q1_REASON", "STEPS", "UNKNOWN_BUDGET", "describe", "locking_warning",
+           "nominal_sizes", "resolve_mesh", "resolve_numerics"]

@@ -1,0 +1,130 @@
+"""The automatic discretisation: element pair and mesh sizes chosen from the scenario.
+
+docs/model.md, "The default discretisation"; pilegroup.model.mesh_defaults.
+"""
+
+import tomllib
+
+import pytest
+
+from pilegroup.errors import ScenarioError
+from pilegroup.model import bundled_text, scenario_from_dict
+from pilegroup.model.loader import BUNDLED
+from pilegroup.model.mesh_defaults import UNKNOWN_BUDGET
+from pilegroup.model.mesh_estimate import estimated_unknowns
+
+#: The sizes the Pier 667 mesh study validated (docs/results.md), which the rules give.
+PIER_SIZES = {"size_m": 1.0, "far_field_size_m": 16.0, "growth": 1.6, "n_circ_min": 28,
+              "dz_surface_m": 1.0, "dz_toe_m": 1.0, "dz_max_m": 6.0, "dz_max_deep_m": 15.0,
+              "dz_growth": 1.4, "dz_cap_m": 1.5, "min_layer_divisions": 2}
+
+
+def doc(name="pier667"):
+    return tomllib.loads(bundled_text(name))
+
+
+def group(n, d, length=40.0, lateral=False):
+    """An n x n group of piles of diameter d at 3 d under a cap, five layers, no [numerics]."""
+    data = doc("pier667")
+    s = 3.0 * d
+    width = (n - 1) * s + 2.0 * d
+    data["piles"] = {"diameter_m": d, "length_in_soil_m": length, "embedment_m": 0.5,
+                     "grid": [n, n], "spacing_m": [s, s]}
+    data["cap"] = {"size_x_m": width, "size_y_m": width, "thickness_m": 2.0}
+    data["site"] |= {"size_x_m": width + 60.0, "size_y_m": width + 60.0,
+                     "depth_m": length + 30.0}
+    data["layers"] = data["layers"][:4] + [data["layers"][-1]]
+    data["layers"][-1]["interface"] = data["layers"][3]["interface"]  # the piles reach it
+    data["outputs"].pop("gauge_depths_m")
+    if lateral:
+        data["stages"][1] |= {"Fx_kN": 500.0}
+    data.pop("numerics", None)
+    return data
+
+
+@pytest.mark.parametrize("name", BUNDLED)
+def test_bundled_scenarios_use_the_defaults(name):
+    data = doc(name)
+    assert "element" not in data.get("numerics", {})
+    assert "mesh" not in data.get("numerics", {})
+    sc = scenario_from_dict(data)
+    assert set(sc.numerics.mesh.automatic) == set(PIER_SIZES)
+
+
+def test_pier_defaults_are_the_validated_mesh():
+    sc = scenario_from_dict(doc())
+    assert sc.numerics.mesh.given() == PIER_SIZES
+    assert sc.numerics.element == "Q1Q1"
+    assert sc.numerics.element_reason.startswith("auto: every action is vertical")
+    assert sc.locking_reason() is None
+
+
+def test_given_keys_are_kept_and_others_stay_automatic():
+    data = doc()
+    data["numerics"] = {"mesh": {"size_m": 0.3, "n_circ_min": 16}}
+    sc = scenario_from_dict(data)
+    m = sc.numerics.mesh
+    assert (m.size_m, m.n_circ_min) == (0.3, 16)
+    assert "size_m" not in m.automatic and "dz_max_m" in m.automatic
+    assert m.dz_max_m == PIER_SIZES["dz_max_m"]
+
+
+def test_given_far_field_below_the_automatic_size_keeps_the_scenario_valid():
+    data = doc()
+    data["numerics"] = {"mesh": {"far_field_size_m": 0.5}}
+    m = scenario_from_dict(data).numerics.mesh
+    assert m.size_m <= m.far_field_size_m == 0.5
+
+
+def test_automatic_is_not_a_scenario_key():
+    data = doc()
+    data["numerics"] = {"mesh": {"automatic": ["size_m"]}}
+    with pytest.raises(ScenarioError, match="unknown key"):
+        scenario_from_dict(data)
+
+
+@pytest.mark.parametrize("n", [2, 4, 6])
+@pytest.mark.parametrize("d", [0.3, 1.0, 2.5])
+def test_groups_up_to_6x6_fit_the_budget(n, d):
+    sc = scenario_from_dict(group(n, d))
+    assert estimated_unknowns(sc) <= UNKNOWN_BUDGET
+
+
+def test_sizes_follow_the_pile_diameter_and_the_gap():
+    small = scenario_from_dict(group(2, 0.6)).numerics.mesh
+    big = scenario_from_dict(group(2, 1.2)).numerics.mesh
+    assert (small.size_m, big.size_m) == (0.6, 1.2)
+    data = group(2, 1.0)
+    data["piles"]["spacing_m"] = [1.5, 1.5]  # a clear gap of 0.5 m between shafts
+    data["cap"] |= {"size_x_m": 3.5, "size_y_m": 3.5}
+    assert scenario_from_dict(data).numerics.mesh.size_m == pytest.approx(0.5)
+
+
+def test_horizontal_actions_choose_q2q1_where_it_fits_with_a_reason():
+    small = group(1, 0.6, length=15.0, lateral=True)
+    small["site"] |= {"size_x_m": 30.0, "size_y_m": 30.0, "depth_m": 25.0}
+    layer = dict(small["layers"][0])
+    layer.pop("thickness_m")
+    small["layers"] = [layer]  # one layer down to the bottom
+    sc = scenario_from_dict(small)
+    assert sc.numerics.element == "Q2Q1"
+    assert sc.discretisation_warning() is None
+    pier = scenario_from_dict(doc("pier667_lateral"))
+    assert pier.numerics.element == "Q1Q1"
+    assert "memory budget" in pier.numerics.element_reason
+    warning = pier.discretisation_warning()
+    assert warning is not None and "'Q2Q1'" in warning and "bend the piles" in warning
+
+
+def test_an_explicit_q1q1_with_horizontal_actions_warns():
+    data = doc("pier667_lateral")
+    data.setdefault("numerics", {})["element"] = "Q1Q1"
+    sc = scenario_from_dict(data)
+    assert sc.numerics.element_reason == "numerics.element"
+    assert "trilinear hexahedra lock" in sc.discretisation_warning()
+
+
+def test_record_names_every_size_and_where_it_came_from():
+    rec = scenario_from_dict(doc()).discretisation()
+    assert rec["element"] == "Q1Q1" and rec["mesh"] == PIER_SIZES
+    assert sorted(rec["automatic"]) == sorted(PIER_SIZES)
