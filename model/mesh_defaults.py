@@ -166,7 +166,7 @@ def locking_warning(num: Numerics, locking: str | None) -> str | None:
     if num.element != "Q1Q1" or locking is None:
         return None
     return (f"numerics.element = 'Q1Q1' where {locking}: trilinear hexahedra lock (too stiff: "
-            "head deflection about 18 % too small in verify lateral-single-pile; a "
+            "head deflection 18-44 % too small in verify lateral-single-pile; a "
             "load-settlement curve that never plunges); 'Q2Q1' is accurate where it fits the "
             f"machine ({num.element_reason})")
 

@@ -70,8 +70,9 @@ DESCRIPTIONS = {
                "pass/fail per case (exit 1 if any fails). Cases: terzaghi (1D consolidation), "
                "mandel (Mandel-Cryer effect), triaxial (Mohr-Coulomb failure load), "
                "shaft-capacity (pile pushed to shaft failure), interface-patch (solver interface "
-               "vs pointwise law), tied-limit (stiff interface vs tied pile). Works under "
-               "mpirun -n 2."),
+               "vs pointwise law), tied-limit (stiff interface vs tied pile), "
+               "undrained-loading (a uniform fill on five meshes: uniform pressure), and the "
+               "ground, downdrag, lateral and capacity cases. Works under mpirun -n 2."),
     "bench": ("constitutive: law updates per second; meshing: cells, quality and time for the "
               "paper's five mesh sizes; verification: run time against error for Terzaghi and "
               "Mandel (table, JSON and PNG); pier: the whole job per mesh size and symmetry "
@@ -82,7 +83,9 @@ DESCRIPTIONS = {
               "floors: the cost of each piece of a linear solve (MatMult, each block's "
               "preconditioner, the whole split, the LU) on the scenario's first load-step "
               "Jacobian, in process (run it under mpirun); presets: the whole job with each "
-              "preset per size and model, and the table of `auto` those runs select."),
+              "preset per size and model, and the table of `auto` those runs select; "
+              "discretisation: each element pair's error on the undrained, lateral and "
+              "consolidation cases against wall time and peak memory."),
     "report": ("Read the CSV and JSON files of a finished or interrupted run (settlement.csv, "
                "pile_profiles.csv, layer_history.csv, pile_loads.csv, load_settlement.csv, "
                "gauges.csv, summary.json), write PNG "
@@ -275,6 +278,12 @@ def _cmd_bench(args: argparse.Namespace) -> int:
         rows = bench_stability(args.out or "out/bench_stability", args.cases, args.ranks or 1,
                                args.timeout or 900.0)
         return 0 if all(r["clean"] for r in rows) else 1
+    if args.what == "discretisation":
+        from pilegroup.studies.bench.discretisation import bench_discretisation
+
+        bench_discretisation(args.out or "out/bench_discretisation",
+                             timeout=args.timeout or 1800.0)
+        return 0
     from pilegroup.studies.bench.verification_bench import bench_verification
 
     bench_verification(out_dir=args.out or "out/bench_verification")
@@ -283,7 +292,7 @@ def _cmd_bench(args: argparse.Namespace) -> int:
 
 def _bench_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("what", choices=["constitutive", "meshing", "verification", "pier",
-                                    "stability", "floors", "presets"])
+                                    "stability", "floors", "presets", "discretisation"])
     p.add_argument("--sizes", type=float, nargs="*", default=None, metavar="H",
                    help="meshing: pile-surface sizes in m (default: the paper's five); "
                    "pier, presets: the sizes to run (default: 1.0); floors: the one size "

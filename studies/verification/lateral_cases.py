@@ -151,12 +151,18 @@ def _last(table: Table) -> dict[str, np.ndarray]:
     return {k: v[m] for k, v in table.items()}
 
 
-@register("lateral-single-pile")
-def lateral_single_pile(size: str = "fast", comm: MPI.Comm | None = None) -> CaseResult:
-    """Head deflection and rotation of a flexible pile against Randolph (1981), 5 %."""
+@register("lateral-single-pile", options=("pair",))
+def lateral_single_pile(size: str = "fast", comm: MPI.Comm | None = None,
+                        pair: str | None = None) -> CaseResult:
+    """Head deflection and rotation of a flexible pile against Randolph (1981), 5 %.
+
+    ``pair``: the element pair instead of the default discretisation's (a benchmark's option).
+    """
     comm = comm or world()
     t0 = time.perf_counter()
     doc = lateral_scenario("single", size)
+    if pair is not None:
+        doc.setdefault("numerics", {})["element"] = pair
     tables, n = run_pipeline(doc, comm, (CAP_MOTION_CSV,))
     motion = _last(tables[CAP_MOTION_CSV])
     u, theta = float(motion["ux_m"][0]), float(motion["ry_rad"][0])
