@@ -280,6 +280,9 @@ class MeshOptions:
     """Vertical element size in the cap, m."""
     min_layer_divisions: int | None = None
     """At least this many elements across every layer."""
+    scale: float = 1.0
+    """Factor on every automatic length (the edges around a pile divided by it): 0.5 halves
+    the default elements, 2 doubles them; keys given are not scaled."""
     automatic: tuple[str, ...] = field(default=(), metadata={"derived": True})
     """The keys chosen automatically (set by the scenario; not a scenario key)."""
 
@@ -306,6 +309,7 @@ class MeshOptions:
                 raise ScenarioError("n_circ_min", self.n_circ_min,
                                     "must be a multiple of 4, >= 8", "-")
             check_bound("numerics.mesh.n_circ_min", self.n_circ_min)
+        require_in_range("scale", self.scale, 0.2, 5.0, "-")
         if self.min_layer_divisions is not None:
             if self.min_layer_divisions < 1:
                 raise ScenarioError("min_layer_divisions", self.min_layer_divisions,

@@ -61,8 +61,20 @@ LENGTHS = ("size_m", "far_field_size_m", "dz_surface_m", "dz_toe_m", "dz_max_m",
            "dz_max_deep_m", "dz_cap_m")
 
 
-def nominal_sizes(sc: EstimatedScenario) -> dict[str, float | int]:
-    """The automatic sizes of every ``numerics.mesh`` key before the memory budget (m, -)."""
+def nominal_sizes(sc: EstimatedScenario, scale: float = 1.0) -> dict[str, float | int]:
+    """The automatic sizes of every ``numerics.mesh`` key before the memory budget (m, -).
+
+    ``scale`` (``numerics.mesh.scale``) multiplies every length and divides the edges around
+    a pile (to the nearest multiple of 4, at least 8): a refinement study's one knob.
+    """
+    out = _nominal(sc)
+    for k in LENGTHS:
+        out[k] = out[k] * scale
+    out["n_circ_min"] = max(8, 4 * round(N_CIRC / scale / 4))
+    return out
+
+
+def _nominal(sc: EstimatedScenario) -> dict[str, float | int]:
     d = max(sc.piles.diameters)
     length = max(sc.piles.lengths)
     width = min(sc.site.size_x_m, sc.site.size_y_m)
@@ -93,13 +105,14 @@ def resolve_mesh(sc: EstimatedScenario, given: Mapping[str, float | int], elemen
     sizes fit :data:`UNKNOWN_BUDGET`; the last one when nothing fits, which the memory check
     then reports).
     """
-    nominal = nominal_sizes(sc)
+    nominal = nominal_sizes(sc, float(given.get("scale", 1.0)))
     if max(sc.piles.lengths) >= sc.site.depth_m:  # the scenario refuses it, with its reason
         return {**nominal, **given}, 0
     size_max = min(SIZE_MAX, 5.0 * min(sc.piles.diameters))
     step = 0
     for step, (factor, n_circ, divisions) in enumerate(STEPS):  # noqa: B007 - returned
-        sizes = dict(nominal, n_circ_min=n_circ, min_layer_divisions=divisions)
+        sizes = dict(nominal, n_circ_min=min(n_circ, nominal["n_circ_min"]),
+                     min_layer_divisions=divisions)
         for k in LENGTHS:
             sizes[k] = min(nominal[k] * factor, DZ_MAX)
         sizes["size_m"] = min(sizes["size_m"], size_max)

@@ -207,11 +207,27 @@ def memory_check(sc: Scenario, geo: ResolvedGeometry, comm: MPI.Comm, force: boo
     if need > budget:
         if not force:
             raise MachineTooSmall("memory", f"{need:.0f} MB per rank",
-                                  f"the run does not fit: {text}; coarsen numerics.mesh, use"
+                                  f"the run does not fit: {text}; {_what_to_change(sc)}, use"
                                   " more ranks or machines, or give --force to run anyway", "")
         if comm.rank == 0:
             log.warning("memory: the run may not fit (--force): %s", text)
     return record
+
+
+def _what_to_change(sc: Scenario) -> str:
+    """What in the scenario would make it smaller: the element pair, the mesh keys given."""
+    num = sc.numerics
+    given = [k for k in num.mesh.given() if k not in num.mesh.automatic and k != "scale"]
+    parts = []
+    if num.element == "Q2Q1":
+        parts.append("numerics.element = 'Q2Q1' holds 6 times the unknowns of 'Q1Q1' on the "
+                     "same mesh")
+    if given:
+        parts.append("remove " + ", ".join(f"numerics.mesh.{k}" for k in given)
+                     + " (the automatic sizes fit a 24 GB machine)")
+    parts.append(f"raise numerics.mesh.scale (now {num.mesh.scale:g}) to coarsen every "
+                 "automatic size")
+    return "; ".join(parts)
 
 
 def memory_on_mesh(sc: Scenario, geo: ResolvedGeometry, unknowns: int, comm: MPI.Comm,

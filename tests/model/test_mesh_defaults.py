@@ -53,7 +53,7 @@ def test_bundled_scenarios_use_the_defaults(name):
 
 def test_pier_defaults_are_the_validated_mesh():
     sc = scenario_from_dict(doc())
-    assert sc.numerics.mesh.given() == PIER_SIZES
+    assert sc.numerics.mesh.given() == PIER_SIZES | {"scale": 1.0}
     assert sc.numerics.element == "Q1Q1"
     assert sc.numerics.element_reason.startswith("auto: every action is vertical")
     assert sc.locking_reason() is None
@@ -126,5 +126,17 @@ def test_an_explicit_q1q1_with_horizontal_actions_warns():
 
 def test_record_names_every_size_and_where_it_came_from():
     rec = scenario_from_dict(doc()).discretisation()
-    assert rec["element"] == "Q1Q1" and rec["mesh"] == PIER_SIZES
+    assert rec["element"] == "Q1Q1" and rec["mesh"] == PIER_SIZES | {"scale": 1.0}
     assert sorted(rec["automatic"]) == sorted(PIER_SIZES)
+
+
+def test_scale_refines_every_automatic_length_and_the_edges_around_a_pile():
+    data = doc()
+    data["numerics"] = {"mesh": {"scale": 1.5, "dz_cap_m": 1.5}}
+    m = scenario_from_dict(data).numerics.mesh
+    assert m.size_m == pytest.approx(1.5) and m.dz_max_deep_m == pytest.approx(22.5)
+    assert m.dz_cap_m == 1.5  # given: not scaled
+    assert m.n_circ_min == 20  # 28 / 1.5 to the nearest multiple of 4
+    data["numerics"] = {"mesh": {"scale": 0.1}}
+    with pytest.raises(ScenarioError, match="scale"):
+        scenario_from_dict(data)

@@ -83,7 +83,13 @@ def test_stale_kept_block_is_set_up_again(small, monkeypatch):
     w, log, pb = _run(sc, md, "fieldsplit_kept")
     assert w == pytest.approx(w_ref, rel=1e-9)
     assert pb.refactorisations == pb_ref.refactorisations
-    assert sum(s.ksp_its for s in log.steps) == sum(s.ksp_its for s in log_ref.steps)
+    its, its_ref = (sum(s.ksp_its for s in g.steps) for g in (log, log_ref))
+    if md.mesh.comm.size == 1:
+        assert its == its_ref
+    else:  # on 2 ranks the split's set-up is not bitwise repeatable from run to run: the
+        # same preset run three times in one process took 104, 105 and 106 iterations
+        # (settlements equal to 1e-12), a solve at the edge of its tolerance taking one more
+        assert abs(its - its_ref) <= 0.02 * its_ref
 
 
 def test_interface_index_set_is_the_interface_nodes(small):

@@ -186,3 +186,21 @@ def test_a_batch_case_plans_on_its_ranks_share_of_the_node():
         assert case_memory_mb(world, single, 8000.0) == pytest.approx(8000.0 / world.size)
     finally:
         single.Free()
+
+
+def test_refusal_names_the_element_and_the_keys_to_change():
+    from mpi4py import MPI
+
+    from pilegroup.errors import MachineTooSmall
+    from pilegroup.geometry.adapter import resolve_geometry
+    from pilegroup.model import load_scenario
+    from pilegroup.model.loader import parse_override
+    from pilegroup.studies.run.memory_check import memory_check
+
+    sets = (*TOO_LARGE, 'numerics.element="Q2Q1"')
+    sc = load_scenario("pier667", dict(parse_override(kv) for kv in sets))
+    with pytest.raises(MachineTooSmall) as err:
+        memory_check(sc, resolve_geometry(sc), MPI.COMM_WORLD)
+    text = str(err.value)
+    assert "numerics.element = 'Q2Q1'" in text and "'Q1Q1'" in text
+    assert "remove numerics.mesh.far_field_size_m" in text and "numerics.mesh.scale" in text
