@@ -48,7 +48,7 @@ from pilegroup.geometry.plan import (
     progression,
 )
 from pilegroup.geometry.plan_cells import outline, structured_cells
-from pilegroup.geometry.quadfix import all_quads, element_quality
+from pilegroup.geometry.quadfix import all_quads, edge_ratio, element_quality
 from pilegroup.geometry.spec import GeometrySpec
 from pilegroup.geometry.symmetry import find_pile
 
@@ -58,6 +58,9 @@ __all__ = ["FAR_FIELD_ALGORITHMS", "EmittedPlan", "FarField", "build_plan", "far
 #: gmsh 2D algorithms tried for the far field (5 Delaunay, 6 Frontal-Delaunay, 8
 #: Frontal-Delaunay for quads), all with Blossom recombination.
 FAR_FIELD_ALGORITHMS = (5, 6, 8)
+#: A far-field mesh with a quadrilateral whose shortest edge is below this fraction of its
+#: longest is not used (two nodes all but coincide: gmsh would merge them).
+MIN_EDGE_RATIO = 1e-3
 
 Segment = tuple[int, int]
 
@@ -215,7 +218,8 @@ def _mesh(pv: PlanView, spec: GeometrySpec, segs: list[Segment], n_outline: int)
             except Exception:  # noqa: BLE001 - an algorithm may fail (QuadRepairError): next
                 continue
             q = min(element_quality(xy, e) for e in quads)
-            if q > 0.0 and (best is None or q > best.min_sj):
+            ratio = min(edge_ratio(xy, e) for e in quads)
+            if q > 0.0 and ratio >= MIN_EDGE_RATIO and (best is None or q > best.min_sj):
                 best = FarField(xy, quads, alg, q, pairs)
     finally:
         gmsh.model.remove()
