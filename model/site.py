@@ -214,6 +214,11 @@ class Site(_PlanRectangle):
         if self.water_table_depth_m > self.depth_m:
             raise ScenarioError("water_table_depth_m", self.water_table_depth_m,
                                 f"must be <= depth_m = {self.depth_m}", "m")
+        if self.water_table_depth_m != 0.0:
+            raise ScenarioError("water_table_depth_m", self.water_table_depth_m,
+                                "only 0 (the water table at the ground surface) is modelled; a "
+                                "water table lowered after the start is a groundwater stage "
+                                "(docs/model.md, 'Ground that moves')", "m")
 
 
 @dataclass(frozen=True)

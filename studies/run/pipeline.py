@@ -116,9 +116,6 @@ def build_problem(sc: Scenario, geo: ResolvedGeometry, md: MeshData, preset: str
 
     ``geo`` is the scenario's resolved geometry (the part of the model ``md`` holds).
     """
-    if sc.site.water_table_depth_m != 0.0:
-        raise ScenarioError("site.water_table_depth_m", sc.site.water_table_depth_m,
-                            "only 0 (water table at the ground surface) is supported so far", "m")
     materials: dict[str, SoilMaterial | ElasticSolid] = {}
     for j, lay in enumerate(sc.layers):
         materials[groups.soil_layer(j + 1)] = SoilMaterial(

@@ -39,6 +39,8 @@ BROKEN = [
     ("unknown-key", "water_table_depth_m = 0.0", "water_table_depth_m = 0.0\ncolour = 1", 1,
      "site.colour", "unknown key"),
     ("missing-key", "diameter_m = 1.0", "", 1, "piles.diameter_m", "missing key"),
+    ("water-table-below-ground", "water_table_depth_m = 0.0", "water_table_depth_m = 1.0", 1,
+     "site.water_table_depth_m", "only 0 (the water table at the ground surface)"),
     ("wrong-type", "E_MPa = 6.8", 'E_MPa = "soft"', 1, "layers[0].E_MPa", "must be a number"),
     ("wrong-type-int", "grid = [3, 3]", "grid = [3.0, 3]", 1, "piles.grid[0]", "integer"),
     ("thickness-nonpositive", "thickness_m = 19.3", "thickness_m = -1.0", 1,
