@@ -7,7 +7,7 @@ Validation happens when a dataclass is built (:mod:`pilegroup.validate`); errors
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field, fields, replace
 from typing import Literal
 
 from pilegroup.errors import ScenarioError
@@ -291,6 +291,11 @@ class MeshOptions:
         return {f.name: getattr(self, f.name) for f in fields(self)
                 if not f.metadata.get("derived") and getattr(self, f.name) is not None}
 
+    def with_given(self, **sizes: float | int) -> MeshOptions:
+        """These options with ``sizes`` set as a scenario's own keys (no longer automatic)."""
+        return replace(self, **sizes, automatic=tuple(k for k in self.automatic
+                                                      if k not in sizes))
+
     def __post_init__(self) -> None:
         for key in ("size_m", "far_field_size_m", "dz_surface_m", "dz_toe_m", "dz_max_m",
                     "dz_max_deep_m", "dz_cap_m"):
@@ -408,9 +413,9 @@ class Numerics:
     uniform on the cap top or the pile heads).
 
     ``element``: ``Q1Q1`` (trilinear displacement and pressure, stabilised), ``Q2Q1``
-    (triquadratic displacement, Taylor–Hood) or ``auto`` (default): Q1Q1 when every action is
-    vertical, Q2Q1 when a load stage has a horizontal force or a moment
-    (:mod:`pilegroup.model.mesh_defaults`). A :class:`Scenario
+    (triquadratic displacement, Taylor–Hood) or ``auto`` (default): Q2Q1 where trilinear
+    hexahedra lock (horizontal actions, a capacity stage in plastic soil) and it fits the memory
+    budget, else Q1Q1 (:mod:`pilegroup.model.mesh_defaults`). A :class:`Scenario
     <pilegroup.model.scenario.Scenario>` always holds the resolved pair.
     """
 

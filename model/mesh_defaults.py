@@ -3,10 +3,11 @@
 Most scenarios never write ``[numerics]``; what they get is this module's choice, and the
 bundled scenarios use it too (docs/model.md, "The default discretisation").
 
-Element pair (``numerics.element = "auto"``): the stabilised equal-order pair ``Q1Q1`` when
-every action on the foundation is vertical, ``Q2Q1`` (Taylor–Hood) when a load stage carries a
-horizontal force or a moment: trilinear hexahedra lock in bending (``verify
-lateral-single-pile``: 18 % too stiff), quadratic ones do not.
+Element pair (``numerics.element = "auto"``): ``Q2Q1`` (Taylor–Hood) where trilinear hexahedra
+lock (the scenario's ``locking_reason``: horizontal actions bend the piles, ``verify
+lateral-single-pile`` 18-44 % too stiff; a capacity stage drives a plastic soil to isochoric
+flow) and the Q2Q1 model fits :data:`UNKNOWN_BUDGET` at the nominal sizes; else the stabilised
+equal-order pair ``Q1Q1``.
 
 Mesh sizes (``numerics.mesh``), for the largest pile diameter ``d``, the longest pile ``L``, the
 block's smaller plan side ``W`` and depth ``D`` (the rules reproduce the sizes the Pier 667 mesh
@@ -152,15 +153,18 @@ def resolve_numerics(sc: EstimatedScenario, locking: str | None) -> Numerics:
     num = sc.numerics
     given = {k: v for k, v in num.mesh.given().items() if k not in num.mesh.automatic}
     element, reason = num.element, "numerics.element"
+    sizes = None
     if element == "auto" or num.element_reason.startswith("auto"):
         element, reason = "Q1Q1", Q1Q1_REASON
         if locking is not None:
-            if resolve_mesh(sc, given, "Q2Q1")[1] == 0:
-                element, reason = "Q2Q1", f"auto: {locking}"
+            q2, step = resolve_mesh(sc, given, "Q2Q1")
+            if step == 0:
+                element, reason, sizes = "Q2Q1", f"auto: {locking}", q2
             else:
                 reason = (f"auto: {locking}, but Q2Q1 exceeds the memory budget "
                           f"({UNKNOWN_BUDGET:,} unknowns) at the automatic mesh sizes")
-    sizes, _ = resolve_mesh(sc, given, element)
+    if sizes is None:
+        sizes, _ = resolve_mesh(sc, given, element)
     automatic = tuple(k for k in sizes if k not in given)
     mesh = MeshOptions(**sizes, automatic=automatic)  # type: ignore[arg-type]
     return replace(num, element=element, mesh=mesh, element_reason=reason)

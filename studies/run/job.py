@@ -58,11 +58,8 @@ def run_scenario(sc: Scenario, out: Path, mesh_size: float | None = None,
     """
     t0 = time.perf_counter()
     if mesh_size is not None:
-        mesh = sc.numerics.mesh
         sc = dataclasses.replace(sc, numerics=dataclasses.replace(
-            sc.numerics, mesh=dataclasses.replace(
-                mesh, size_m=mesh_size,
-                automatic=tuple(k for k in mesh.automatic if k != "size_m"))))
+            sc.numerics, mesh=sc.numerics.mesh.with_given(size_m=mesh_size)))
     if resume and stop_after != "solve":
         raise ScenarioError("--stop-after", stop_after, "only 'solve' with --resume")
     with folder_lock(out, comm):

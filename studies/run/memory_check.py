@@ -11,8 +11,8 @@ The estimate (docs/benchmarks.md, "Memory estimate before meshing"):
 * cells: the graded-mesh integral of :func:`pilegroup.model.mesh_estimate.estimated_cells`
   without its safety factor (the central estimate: 17,325 against the 18,266 hexahedra of the
   quarter Pier 667 at h = 1 m), times the part a symmetry-reduced model keeps;
-* unknowns: cells x :data:`VERTICES_PER_CELL` x the unknowns per vertex of the element pair
-  (:data:`UNKNOWNS_PER_VERTEX`);
+* unknowns: :func:`pilegroup.model.mesh_estimate.estimated_unknowns` (cells x vertices per
+  cell x the unknowns per vertex of the element pair);
 * memory per rank: ``BASE_MB + C * unknowns^ALPHA / ranks`` (MB), with ``C`` and ``ALPHA``
   fitted (least squares in log-log) per linear-solver family to the peaks measured on 2 ranks
   in docs/benchmarks.md (:data:`MEASURED_PEAKS`); ``auto`` is the preset it would choose
@@ -44,12 +44,8 @@ from pilegroup.errors import MachineTooSmall
 from pilegroup.fileio import proc_kib
 from pilegroup.geometry.adapter import ResolvedGeometry
 from pilegroup.model import Scenario
-from pilegroup.model.mesh_estimate import (
-    SAFETY,
-    UNKNOWNS_PER_VERTEX,
-    VERTICES_PER_CELL,
-    estimated_cells,
-)
+from pilegroup.model.mesh_estimate import SAFETY, estimated_cells
+from pilegroup.model.mesh_estimate import estimated_unknowns as model_unknowns
 from pilegroup.studies.run.auto_preset import scenario_preset
 
 log = logging.getLogger(__name__)
@@ -99,8 +95,8 @@ FITS = {k: _fit(v) for k, v in MEASURED_PEAKS.items()}
 
 def estimated_unknowns(sc: Scenario, geo: ResolvedGeometry) -> tuple[float, float]:
     """``(cells, unknowns)`` of the model ``geo`` holds, before meshing (central estimates)."""
-    cells = estimated_cells(sc) / SAFETY * geo.kept_fraction
-    return cells, cells * VERTICES_PER_CELL * UNKNOWNS_PER_VERTEX.get(sc.numerics.element, 25)
+    return (estimated_cells(sc) / SAFETY * geo.kept_fraction,
+            model_unknowns(sc, geo.kept_fraction))
 
 
 def estimated_peak_mb(unknowns: float, preset: str, ranks: int) -> float:

@@ -140,3 +140,16 @@ def test_scale_refines_every_automatic_length_and_the_edges_around_a_pile():
     data["numerics"] = {"mesh": {"scale": 0.1}}
     with pytest.raises(ScenarioError, match="scale"):
         scenario_from_dict(data)
+
+
+def test_a_size_set_on_a_resolved_scenario_is_kept_and_the_others_chosen_again():
+    import dataclasses
+
+    sc = scenario_from_dict(doc())
+    mesh = sc.numerics.mesh.with_given(size_m=0.3)
+    again = dataclasses.replace(sc, numerics=dataclasses.replace(sc.numerics, mesh=mesh))
+    m = again.numerics.mesh
+    assert m.size_m == 0.3 and "size_m" not in m.automatic
+    assert {k: v for k, v in m.given().items() if k != "size_m"} == \
+        {k: v for k, v in sc.numerics.mesh.given().items() if k != "size_m"}
+    assert again.numerics.element_reason == sc.numerics.element_reason
