@@ -20,7 +20,9 @@ study validated, docs/results.md):
   along the piles,
   ``dz_max_deep_m = min(15 d, (D - L) / 4, W / 4)`` below the toes, ``dz_growth = 1.4``;
 * ``dz_cap_m = min(1.5 d, cap thickness)``; ``min_layer_divisions = 2`` (every layer at least
-  two elements thick, so thin layers set their own sizes).
+  two elements thick, so thin layers set their own sizes);
+* with ``Q2Q1``: ``size_m = min(2 d, clear gap)``, twice every vertical length (the cap's at
+  most its thickness) and ``n_circ_min = 16`` (:data:`Q2_LENGTH`).
 
 Memory budget: when the whole model's estimated unknowns (:func:`estimated_unknowns`) exceed
 :data:`UNKNOWN_BUDGET`, the automatic sizes coarsen step by step (:data:`STEPS`: longer
@@ -48,6 +50,14 @@ Q1Q1_REASON = ("auto: every action is vertical and the soil stays in its elastic
 UNKNOWN_BUDGET = 600_000
 #: Edges around a pile.
 N_CIRC = 28
+#: Taylor–Hood's sizes: the vertical lengths (:data:`Q2_LENGTHS`) and the size next to the
+#: piles (at most the clear gap) times ``Q2_LENGTH``, and :data:`N_CIRC_Q2` edges around a
+#: pile: a quadratic element spans what two trilinear ones do. On ``verify
+#: lateral-single-pile`` (docs/benchmarks.md, "The default discretisation: the options
+#: measured") Q2Q1 at these sizes is 4.8 % from Randolph's head deflection with 33,065
+#: unknowns, at the trilinear sizes 4.1 % with 134,575.
+Q2_LENGTH, N_CIRC_Q2 = 2.0, 16
+Q2_LENGTHS = ("dz_surface_m", "dz_toe_m", "dz_max_m", "dz_max_deep_m", "dz_cap_m")
 #: Growth ratios in plan and in depth.
 GROWTH, DZ_GROWTH = 1.6, 1.4
 #: Coarsening steps tried in order until the estimate fits: (factor on the automatic lengths,
@@ -62,29 +72,47 @@ LENGTHS = ("size_m", "far_field_size_m", "dz_surface_m", "dz_toe_m", "dz_max_m",
            "dz_max_deep_m", "dz_cap_m")
 
 
-def nominal_sizes(sc: EstimatedScenario, scale: float = 1.0) -> dict[str, float | int]:
+def nominal_sizes(sc: EstimatedScenario, scale: float = 1.0, element: str = "Q1Q1"
+                  ) -> dict[str, float | int]:
     """The automatic sizes of every ``numerics.mesh`` key before the memory budget (m, -).
 
-    ``scale`` (``numerics.mesh.scale``) multiplies every length and divides the edges around
-    a pile (to the nearest multiple of 4, at least 8): a refinement study's one knob.
+    ``element``: ``Q2Q1`` takes :data:`Q2_LENGTH` times the lengths next to and along the
+    piles and :data:`N_CIRC_Q2` edges around a pile (a quadratic element spans what two
+    trilinear ones do). ``scale`` (``numerics.mesh.scale``) multiplies every length and
+    divides the edges around a pile (to the nearest multiple of 4, at least 8): a refinement
+    study's one knob.
     """
     out = _nominal(sc)
+    n_circ = N_CIRC
+    if element == "Q2Q1":
+        n_circ = N_CIRC_Q2
+        for k in Q2_LENGTHS:
+            out[k] = out[k] * Q2_LENGTH
+        out["size_m"] = min(out["size_m"] * Q2_LENGTH, _clear_gap(sc))
+        out["far_field_size_m"] = max(out["far_field_size_m"], out["size_m"])
+        if sc.cap is not None:
+            out["dz_cap_m"] = min(out["dz_cap_m"], sc.cap.thickness_m)
     for k in LENGTHS:
         out[k] = out[k] * scale
-    out["n_circ_min"] = max(8, 4 * round(N_CIRC / scale / 4))
+    out["n_circ_min"] = max(8, 4 * round(n_circ / scale / 4))
     return out
+
+
+def _clear_gap(sc: EstimatedScenario) -> float:
+    """The least clear gap between two piles (m; infinite for a single pile)."""
+    gap = math.inf
+    for (i, a), (j, b) in itertools.combinations(enumerate(sc.piles.xy), 2):
+        g = math.dist(a, b) - (sc.piles.diameters[i] + sc.piles.diameters[j]) / 2
+        if g > 0:
+            gap = min(gap, g)
+    return gap
 
 
 def _nominal(sc: EstimatedScenario) -> dict[str, float | int]:
     d = max(sc.piles.diameters)
     length = max(sc.piles.lengths)
     width = min(sc.site.size_x_m, sc.site.size_y_m)
-    size = d
-    xy = sc.piles.xy
-    for (i, a), (j, b) in itertools.combinations(enumerate(xy), 2):
-        gap = math.dist(a, b) - (sc.piles.diameters[i] + sc.piles.diameters[j]) / 2
-        if gap > 0:
-            size = min(size, gap)
+    size = min(d, _clear_gap(sc))
     far = max(size, min(width / 4, 16 * d))
     dz = max(d, length / 80)  # a slender pile needs no elements as short as its diameter
     out: dict[str, float | int] = {
@@ -106,7 +134,7 @@ def resolve_mesh(sc: EstimatedScenario, given: Mapping[str, float | int], elemen
     sizes fit :data:`UNKNOWN_BUDGET`; the last one when nothing fits, which the memory check
     then reports).
     """
-    nominal = nominal_sizes(sc, float(given.get("scale", 1.0)))
+    nominal = nominal_sizes(sc, float(given.get("scale", 1.0)), element)
     if max(sc.piles.lengths) >= sc.site.depth_m:  # the scenario refuses it, with its reason
         return {**nominal, **given}, 0
     size_max = min(SIZE_MAX, 5.0 * min(sc.piles.diameters))

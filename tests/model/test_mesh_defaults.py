@@ -116,6 +116,20 @@ def test_horizontal_actions_choose_q2q1_where_it_fits_with_a_reason():
     assert warning is not None and "'Q2Q1'" in warning and "bend the piles" in warning
 
 
+def test_q2q1_spans_two_trilinear_lengths_within_the_gap():
+    data = group(2, 1.2, lateral=True)
+    q1 = scenario_from_dict(group(2, 1.2)).numerics.mesh
+    sc = scenario_from_dict(data)
+    q2 = sc.numerics.mesh
+    assert sc.numerics.element == "Q2Q1"
+    assert q2.size_m == pytest.approx(min(2.0 * q1.size_m, 3 * 1.2 - 1.2))
+    for k in ("dz_surface_m", "dz_toe_m", "dz_max_m", "dz_max_deep_m"):
+        assert getattr(q2, k) == pytest.approx(2.0 * getattr(q1, k)), k
+    assert q2.dz_cap_m == pytest.approx(min(2.0 * q1.dz_cap_m, 2.0))  # at most the cap
+    assert (q1.n_circ_min, q2.n_circ_min) == (28, 16)
+    assert q2.far_field_size_m == q1.far_field_size_m
+
+
 def test_an_explicit_q1q1_with_horizontal_actions_warns():
     data = doc("pier667_lateral")
     data.setdefault("numerics", {})["element"] = "Q1Q1"
