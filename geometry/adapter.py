@@ -8,11 +8,13 @@ plane exactly when its pile layout, cap and loads are (:func:`GeometrySpec.symme
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, replace
 
-from pilegroup.errors import ScenarioError
+from pilegroup.errors import ScenarioError, entry_name
 from pilegroup.geometry import spec
 from pilegroup.geometry import symmetry as sym
+from pilegroup.geometry.plan import cell_grid
 from pilegroup.model import Scenario
 from pilegroup.model.actions import ANTISYMMETRIC, COMPONENTS
 
@@ -21,7 +23,9 @@ def _full_spec(sc: Scenario, mesh_size: float | None) -> spec.GeometrySpec:
     """The whole model of scenario ``sc`` (``mesh_size`` overrides h, m).
 
     Every pile keeps its own diameter and length in soil (``sc.piles.diameters``,
-    ``sc.piles.lengths``) and the scenario's numbering; the embedment is the same for all.
+    ``sc.piles.lengths``) and the scenario's numbering; the embedment is the same for all. A
+    water table below the ground surface is a mesh surface (``levels``): the unit weight and
+    the drained boundary change there (docs/model.md, "The ground at rest").
     """
     m = sc.numerics.mesh
     sizing = spec.MeshSizing(
@@ -47,6 +51,7 @@ def _full_spec(sc: Scenario, mesh_size: float | None) -> spec.GeometrySpec:
                     for (x, y), d, length in zip(p.xy, p.diameters, p.lengths, strict=True)),
         cap=cap,
         sizing=sizing,
+        levels=(wt,) if (wt := sc.site.water_table_depth_m) > 0.0 else (),
     )
 
 
@@ -136,10 +141,47 @@ def resolve_geometry(sc: Scenario, mesh_size: float | None = None) -> ResolvedGe
     x = 0 and y = 0, ``half_x`` / ``half_y`` when about one of them, else ``none``; an explicit
     value must be one the scenario allows (else :class:`~pilegroup.errors.ScenarioError` naming
     ``numerics.symmetry``).
+
+    Every rule of the geometry that needs no mesh is checked here, so that ``pilegroup scenario
+    validate`` and a run refuse a layout alike before meshing: the
+    :class:`~pilegroup.geometry.spec.GeometrySpec` rules and the structured cells of the plan
+    (:func:`pilegroup.geometry.plan.cell_grid`: a pile too close to a neighbouring pile row or
+    column). A refusal names the scenario key that places the pile (:func:`_scenario_key`).
     """
-    full = _full_spec(sc, mesh_size)
-    mode, reason = _resolve(sc, full)
+    try:
+        full = _full_spec(sc, mesh_size)
+        mode, reason = _resolve(sc, full)
+        cell_grid(full)
+    except ScenarioError as exc:
+        raise _scenario_key(sc, exc) from None
     return ResolvedGeometry(full if mode == "none" else replace(full, symmetry=mode), reason)
+
+
+_SPEC_PILE = re.compile(r"piles\[(\d+)\](\.length_in_soil|\.embedment)?")
+
+
+def _scenario_key(sc: Scenario, exc: ScenarioError) -> ScenarioError:
+    """A geometry error about ``piles[i]`` (the spec's index) or the block, by its scenario key.
+
+    ``block`` is ``site``; ``piles[i]`` is the pile's position
+    (:meth:`~pilegroup.model.piles.Piles.position_key`), ``piles[i].length_in_soil`` its
+    length; a key that names no pile of its own (``piles.grid``, ``piles.embedment_m``) gets the
+    pile, counted from 1, in front of the reason.
+    """
+    if exc.key == "block":
+        why = "" if sc.cap is not None else (
+            f" (without a cap: the piles' circles widened by {spec.MeshSizing.near_field_margin:g}"
+            " m, the structured mesh around them)")
+        return ScenarioError("site", [sc.site.size_x_m, sc.site.size_y_m], exc.allowed + why,
+                             exc.unit)
+    m = _SPEC_PILE.fullmatch(exc.key)
+    if m is None:
+        return exc
+    n = int(m.group(1)) + 1
+    key = {None: sc.piles.position_key(n), ".embedment": "piles.embedment_m",
+           ".length_in_soil": sc.piles.key_of(n, "length_in_soil_m")}[m.group(2)]
+    allowed = exc.allowed if entry_name(key) else f"pile {n}: {exc.allowed}"
+    return ScenarioError(key, exc.value, allowed, exc.unit)
 
 
 def geometry_spec(sc: Scenario, mesh_size: float | None = None) -> spec.GeometrySpec:

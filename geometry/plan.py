@@ -320,13 +320,13 @@ def cell_grid(spec: GeometrySpec) -> tuple[list[float], list[float], CellPiles]:
         ix = int(np.searchsorted(xb, p.x)) - 1
         iy = int(np.searchsorted(yb, p.y)) - 1
         if (ix, iy) in cell_pile:
-            raise ScenarioError(f"piles[{i + 1}] position", [p.x, p.y],
+            raise ScenarioError(f"piles[{i}]", [p.x, p.y],
                                 f"falls into the structured cell of pile {cell_pile[(ix, iy)] + 1}"
                                 ": pile positions must form a rectilinear grid", "m")
         cx0, cx1, cy0, cy1 = xb[ix], xb[ix + 1], yb[iy], yb[iy + 1]
         clear = min(p.x - cx0, cx1 - p.x, p.y - cy0, cy1 - p.y) - p.radius
         if clear < 0.2 * p.radius:
-            raise ScenarioError(f"piles[{i + 1}] position", [p.x, p.y],
+            raise ScenarioError(f"piles[{i}]", [p.x, p.y],
                                 f"leaves only {clear:.3g} m to its structured cell edge: piles"
                                 " too close to each other or to the cap edge (need >= 0.2 x"
                                 " radius)", "m")

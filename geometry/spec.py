@@ -211,6 +211,10 @@ class GeometrySpec:
     Piles are numbered 1..n in the order given (physical groups ``pile_{i}``). Without a cap,
     every pile must have ``embedment == 0`` (its head is on the ground surface).
 
+    ``levels``: depths (m, positive down) of horizontal mesh surfaces in the soil besides the
+    layer boundaries and pile toes (the water table: its cells above and below keep their
+    layer's group).
+
     ``symmetry`` reduces the model to the part with ``x >= 0`` (``half_x``), ``y >= 0``
     (``half_y``) or both (``quarter``); the geometry must be mirror-symmetric about each plane
     it cuts at (:mod:`pilegroup.geometry.symmetry`). ``piles`` always lists the full model's
@@ -225,10 +229,15 @@ class GeometrySpec:
     cap: CapSpec | None = None
     sizing: MeshSizing = field(default_factory=MeshSizing)
     symmetry: sym.Symmetry = "none"
+    levels: tuple[float, ...] = ()
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "layers", tuple(self.layers))
         object.__setattr__(self, "piles", tuple(self.piles))
+        object.__setattr__(self, "levels", tuple(float(v) for v in self.levels))
+        for i, v in enumerate(self.levels):
+            require_in_range(f"levels[{i}]", v, 0.0, self.block.depth, "m", lo_open=True,
+                             hi_open=True)
         for check in (self._check_layers, self._check_piles, self._check_symmetry):
             check()
 
@@ -287,7 +296,9 @@ class GeometrySpec:
                 dist = math.hypot(p.x - q.x, p.y - q.y)
                 if dist <= 0.5 * (p.diameter + q.diameter):
                     raise ScenarioError(f"piles[{i}]", (p.x, p.y),
-                                        f"overlaps pile {k + 1}: centre distance {dist:g}", "m")
+                                        f"overlaps pile {k + 1}: centre distance {dist:g} m must"
+                                        " exceed the mean of their diameters,"
+                                        f" {0.5 * (p.diameter + q.diameter):g} m", "m")
         x0, x1, y0, y1 = self.structured_region()
         if not (-b.size_x / 2 < x0 and x1 < b.size_x / 2 and -b.size_y / 2 < y0
                 and y1 < b.size_y / 2):
@@ -380,11 +391,13 @@ class GeometrySpec:
         """Hex digest identifying the geometry and mesh parameters (plus ``extra``).
 
         ``symmetry`` enters the key only when it reduces the model: the full model's key is that
-        of its geometry and sizing alone.
+        of its geometry and sizing alone; ``levels`` only when there are any.
         """
         data = self.to_dict()
         if self.symmetry == "none":
             del data["symmetry"]
+        if not self.levels:
+            del data["levels"]
         payload = json.dumps(data, sort_keys=True, default=repr) + "|" + extra
         return hashlib.sha256(payload.encode()).hexdigest()[:20]
 

@@ -1,7 +1,8 @@
 """Vertical division of the extrusion: segments between levels and graded element heights.
 
 Pure numpy (no gmsh). Levels in m, z up, ground surface z = 0. The soil column is cut at every
-layer boundary and every pile toe; the cap at every pile top (embedment) and its top. Inside
+layer boundary, every pile toe and the spec's other levels (a water table); the cap at every
+pile top (embedment) and its top. Inside
 each segment the element height follows the size function
 
     dz(z) = min(dz_cap_here, min_k (dz_k + (g - 1) |z - z_k|))
@@ -108,12 +109,14 @@ def vertical_segments(spec: GeometrySpec) -> tuple[list[Segment], list[Segment]]
     """The extrusion slabs of the soil (from z = 0 down) and of the cap (from z = 0 up).
 
     Returns ``(soil, cap)``; ``cap`` is empty without a cap. Soil slabs are cut at every layer
-    boundary and pile toe, cap slabs at every pile top.
+    boundary, pile toe and level of ``spec.levels`` (a water table), cap slabs at every pile
+    top.
     """
     s = spec.sizing
     depth = spec.block.depth
     dz = _size_function(spec)
-    cuts = [0.0, *spec.layer_bottoms(), *(-p.length_in_soil for p in spec.piles)]
+    cuts = [0.0, *spec.layer_bottoms(), *(-p.length_in_soil for p in spec.piles),
+            *(-d for d in spec.levels)]
     levels = _unique_sorted_desc(cuts, depth)
     soil = []
     for za, zb in zip(levels[:-1], levels[1:], strict=True):

@@ -13,24 +13,18 @@ from pilegroup.model.analysis import (
     Numerics,
     Outputs,
     Soil,
-    Stage,
     Time,
     TimeStepping,
 )
 from pilegroup.model.loader import BUNDLED, bundled_text, load_scenario, scenario_from_dict
+from pilegroup.model.piles import Installation, LayoutPile, Piles
 from pilegroup.model.scenario import Scenario
-from pilegroup.model.site import (
-    Cap,
-    InterfaceParams,
-    Layer,
-    LayoutPile,
-    Piles,
-    Site,
-    Structure,
-)
+from pilegroup.model.site import Cap, InterfaceParams, Layer, Site, Structure
+from pilegroup.model.stages import Stage
 
 __all__ = [
-    "BUNDLED", "Cap", "ConvergenceError", "InterfaceOptions", "InterfaceParams", "Layer",
+    "BUNDLED", "Cap", "ConvergenceError", "Installation", "InterfaceOptions", "InterfaceParams",
+    "Layer",
     "LayoutPile", "LinearSolver", "MeshOptions", "Numerics", "Outputs", "PilegroupError", "Piles",
     "Scenario", "ScenarioError", "Site", "Soil", "Stage", "Structure", "Time", "TimeStepping",
     "bundled_text", "load_scenario", "scenario_from_dict",

@@ -15,7 +15,7 @@ the face's centroid C, so the moments given about a point P are moved there firs
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -38,7 +38,10 @@ class Actions:
     ``None``: the loaded face's centre (the cap's top face, or the pile heads without a cap).
     """
 
-    point_m: tuple[float, float, float] | None = None
+    point_m: tuple[float, float, float] | None = field(default=None, metadata={
+        "allowed": "above the loaded face's centre in plan with a capacity stage"})
+    """The point ``[x, y, z]`` the load stages' moments are given about, m; not set: the
+    centre of the loaded face (the cap's top, or the single pile's head)."""
 
     def __post_init__(self) -> None:
         if self.point_m is not None:

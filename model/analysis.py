@@ -1,4 +1,6 @@
-"""How the analysis is run: modelling options, stages, time, mesh, numerics, outputs.
+"""How the analysis is run: modelling options, time, mesh, numerics, outputs.
+
+The stages are in :mod:`pilegroup.model.stages`.
 
 Field names are the TOML keys (with their unit where they have one, e.g. ``duration_day``).
 Validation happens when a dataclass is built (:mod:`pilegroup.validate`); errors are
@@ -15,208 +17,69 @@ from pilegroup.model.bounds import check_bound
 from pilegroup.validate import (
     is_finite_number,
     require_finite,
-    require_in_range,
     require_non_negative,
     require_one_of,
     require_positive,
 )
+
+#: A soil law (``soil.model``, ``layers.model``; docs/model.md).
+SoilModel = Literal["mohr_coulomb", "drucker_prager", "linear_elastic", "modified_cam_clay",
+                    "soft_soil_creep"]
 
 
 @dataclass(frozen=True)
 class Soil:
     """Which constitutive law the soil layers use."""
 
-    model: Literal["mohr_coulomb", "drucker_prager", "linear_elastic"] = "mohr_coulomb"
+    model: SoilModel = "mohr_coulomb"
+    """The soil layers' law, unless a layer names its own (``layers.model``): Mohr-Coulomb or
+    Drucker-Prager (elastic-perfectly plastic, the layers' ``phi_deg``, ``c_kPa``,
+    ``psi_deg``), linear elastic (no strength keys), Modified Cam Clay or Soft Soil Creep (the
+    layers' critical-state keys; docs/model.md, "Soil models per layer")."""
+
+
+#: The soil models whose strength the layers' ``phi_deg``, ``c_kPa`` and ``psi_deg`` give.
+PLASTIC_SOILS = ("mohr_coulomb", "drucker_prager")
+#: The critical-state soil models: stiffness and pre-consolidation follow the stress.
+CRITICAL_STATE_SOILS = ("modified_cam_clay", "soft_soil_creep")
+#: The interface modes with an interface law (the piles on their own displacement field).
+INTERFACE_LAWS = ("elastic", "viscoplastic")
 
 
 @dataclass(frozen=True)
 class InterfaceOptions:
-    """How the pile-soil interface is modelled.
-
-    ``mode``: ``tied`` (piles share nodes with the soil, no interface law), ``elastic``
-    (hyperbolic springs only) or ``viscoplastic`` (the paper's full law). ``variant``: ``default``
-    (our consistent reading) or ``seed`` (the paper's literal equations), see docs/model.md.
-    The normal penalty stiffness is ``normal_stiffness_factor`` x E_layer / mesh size (kPa/m).
-    ``quadrature``: where the law is evaluated and its state lives, ``nodal`` (the interface
-    nodes) or ``gauss`` (2 x 2 Gauss points per facet, Q1Q1 only); docs/solver.md compares them.
-    """
+    """How the pile-soil interface is modelled (docs/model.md, items 1-4)."""
 
     mode: Literal["tied", "elastic", "viscoplastic"] = "viscoplastic"
-    variant: Literal["default", "seed"] = "default"
-    integrator: Literal["implicit", "explicit"] = "implicit"
-    N: float = 1.0
-    normal_stiffness_factor: float = 100.0
-    base: bool = True
-    quadrature: Literal["nodal", "gauss"] = "nodal"
+    """``tied``: piles share nodes with the soil, no interface law; ``elastic``: hyperbolic
+    springs only; ``viscoplastic``: the paper's full law."""
+    variant: Literal["default", "seed"] = field(
+        default="default", metadata={"interface_modes": ("viscoplastic",)})
+    """The yield function: ``default``, our consistent reading, or ``seed``, the paper's
+    literal Eq. 15 (docs/model.md)."""
+    integrator: Literal["implicit", "explicit"] = field(
+        default="implicit", metadata={"interface_modes": ("viscoplastic",)})
+    """The viscoplastic slip's integration: backward Euler, or the paper's forward update."""
+    N: float = field(default=1.0, metadata={"interface_modes": ("viscoplastic",)})
+    """Perzyna exponent of the viscoplastic slip rate."""
+    normal_stiffness_factor: float = field(default=100.0,
+                                           metadata={"interface_modes": INTERFACE_LAWS})
+    """The normal penalty stiffness is this factor x the layer's E / the mesh size (kPa/m)."""
+    base: bool = field(default=True, metadata={"interface_modes": INTERFACE_LAWS,
+                                               "allowed": "true"})
+    """An interface under every pile base too (the only arrangement modelled)."""
+    quadrature: Literal["nodal", "gauss"] = field(default="nodal",
+                                                  metadata={"interface_modes": INTERFACE_LAWS})
+    """Where the law is evaluated: the interface nodes, or 2 x 2 Gauss points per facet (with
+    ``numerics.element = "Q1Q1"`` only); docs/solver.md compares them."""
 
     def __post_init__(self) -> None:
         for key in ("N", "normal_stiffness_factor"):
             require_positive(key, getattr(self, key), "-")
             check_bound(f"interface.{key}", getattr(self, key))
-
-
-#: The keys each stage kind takes (required first, then optional), beside ``name`` and ``kind``.
-STAGE_KEYS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
-    "geostatic": ((), ()),
-    "load": (("duration_day",), ("cap_load_kN", "Fz_kN", "Fx_kN", "Fy_kN", "Mx_kNm", "My_kNm",
-                                 "Mz_kNm")),
-    "consolidation": ((), ("until_day",)),
-    "surcharge": (("surcharge_kPa", "duration_day"), ("area_m",)),
-    "groundwater": (("drawdown_m", "duration_day"), ()),
-    "installation": ((), ()),
-    "capacity": (("max_load_kN", "duration_day"),
-                 ("plunging_stiffness_ratio", "single_pile_capacity_kN")),
-}
-_STAGE_UNITS = {"cap_load_kN": "kN", "duration_day": "day", "until_day": "day",
-                "surcharge_kPa": "kPa", "area_m": "m", "drawdown_m": "m", "max_load_kN": "kN",
-                "plunging_stiffness_ratio": "-", "single_pile_capacity_kN": "kN",
-                "Fx_kN": "kN", "Fy_kN": "kN", "Fz_kN": "kN", "Mx_kNm": "kN m", "My_kNm": "kN m",
-                "Mz_kNm": "kN m"}
-#: The six cap actions of a load stage, in the order of the components (Fx, Fy, Fz, Mx, My, Mz).
-ACTION_KEYS = ("Fx_kN", "Fy_kN", "Fz_kN", "Mx_kNm", "My_kNm", "Mz_kNm")
-
-#: Default of ``plunging_stiffness_ratio``: the foundation plunges once its tangent stiffness
-#: falls below 2 % of its initial one (docs/model.md, "Capacity").
-PLUNGING_STIFFNESS_RATIO = 0.02
-
-
-@dataclass(frozen=True)
-class Stage:
-    """One analysis stage.
-
-    ``kind``: ``geostatic`` (in-situ stresses, no time), ``load`` (ramps the cap actions to their
-    values at the stage end over ``duration_day``, drained top, consolidating meanwhile: the
-    vertical load ``cap_load_kN`` (down) or ``Fz_kN`` (z up), and optionally ``Fx_kN``,
-    ``Fy_kN``, ``Mx_kNm``, ``My_kNm``, ``Mz_kNm`` in global axes about the scenario's action
-    point, docs/model.md, "Cap actions"; a component a stage omits keeps its value),
-    ``consolidation``
-    (every action held until ``until_day``, or until ``time.end_day`` when omitted),
-    ``surcharge`` (a pressure ``surcharge_kPa`` placed on the ground surface over
-    ``duration_day``: a fill or an embankment, over the whole surface or the rectangle
-    ``area_m``, never beneath the cap, and held afterwards) or ``groundwater`` (the water
-    table lowered by ``drawdown_m`` over ``duration_day``, held afterwards) or ``installation``
-    (the moment the piles and cap are installed, instantaneous: before it the ground moves
-    without them) or ``capacity`` (the cap load raised linearly from its value so far to
-    ``max_load_kN`` over ``duration_day`` until the foundation fails: the last stage; its
-    result is the load–settlement curve and the ultimate capacity, docs/model.md, "Capacity").
-    Every action keeps its value in the stages that follow; docs/model.md ("Ground that
-    moves") gives the physics.
-    """
-
-    name: str
-    kind: Literal["geostatic", "load", "consolidation", "surcharge", "groundwater",
-                  "installation", "capacity"]
-    cap_load_kN: float | None = None
-    """Load stage: the vertical cap load at the stage end, kN, downward positive."""
-    Fz_kN: float | None = None
-    """Load stage: the vertical cap action at the stage end, kN, z up (``-cap_load_kN``)."""
-    Fx_kN: float | None = None
-    """Load stage: horizontal cap force along x at the stage end, kN."""
-    Fy_kN: float | None = None
-    """Load stage: horizontal cap force along y at the stage end, kN."""
-    Mx_kNm: float | None = None
-    """Load stage: cap moment about the x axis at the stage end (right-hand rule), kN m."""
-    My_kNm: float | None = None
-    """Load stage: cap moment about the y axis at the stage end, kN m."""
-    Mz_kNm: float | None = None
-    """Load stage: cap torque about the z axis at the stage end, kN m."""
-    duration_day: float | None = None
-    """Load, surcharge and groundwater stages: the time over which the action is ramped, day."""
-    until_day: float | None = None
-    """Consolidation stage: its end, day (default ``time.end_day``)."""
-    surcharge_kPa: float | None = None
-    """Surcharge stage: pressure added on the ground surface, kPa (negative: a fill removed)."""
-    area_m: tuple[float, float, float, float] | None = None
-    """Surcharge stage: the loaded rectangle ``[x_min, x_max, y_min, y_max]``, m, in the
-    coordinates of the site (origin at the pile group's centre); default: the whole surface."""
-    drawdown_m: float | None = None
-    """Groundwater stage: lowering of the water table, m (negative: the water table rises)."""
-    max_load_kN: float | None = None
-    """Capacity stage: the largest cap load tried, kN (reached at the end of ``duration_day``
-    unless the foundation fails first)."""
-    plunging_stiffness_ratio: float | None = None
-    """Capacity stage: plunging once the tangent stiffness of the load–settlement curve falls
-    below this fraction of its initial value (default :data:`PLUNGING_STIFFNESS_RATIO`)."""
-    single_pile_capacity_kN: float | None = None
-    """Capacity stage: the capacity of one pile alone (e.g. from a capacity run of the single
-    pile), kN; the group efficiency is reported when it is given."""
-
-    def __post_init__(self) -> None:
-        required, optional = STAGE_KEYS[self.kind]
-        for key in _STAGE_UNITS:
-            value = getattr(self, key)
-            if key in required and value is None:
-                raise ScenarioError(key, None, f"missing: required for a {self.kind} stage",
-                                    _STAGE_UNITS[key])
-            if value is not None and key not in required + optional:
-                kinds = [k for k, (r, o) in STAGE_KEYS.items() if key in r + o]
-                raise ScenarioError(key, value, f"not allowed for a {self.kind} stage (only for"
-                                    f" {' and '.join(kinds)})", _STAGE_UNITS[key])
-        if self.cap_load_kN is not None:
-            require_non_negative("cap_load_kN", self.cap_load_kN, "kN")
-            check_bound("stages.cap_load_kN", self.cap_load_kN)
-        self._check_actions()
-        for key in ("max_load_kN", "single_pile_capacity_kN"):
-            if getattr(self, key) is not None:
-                require_positive(key, getattr(self, key), "kN")
-                check_bound("stages.cap_load_kN", getattr(self, key), key)
-        if self.plunging_stiffness_ratio is not None:
-            require_in_range("plunging_stiffness_ratio", self.plunging_stiffness_ratio, 0.0, 1.0,
-                             "-", lo_open=True, hi_open=True)
-        if self.duration_day is not None:
-            require_positive("duration_day", self.duration_day, "day")
-            check_bound("stages.duration_day", self.duration_day)
-        if self.until_day is not None:  # a day on the analysis's time axis (may be < 0)
-            require_finite("until_day", self.until_day, "day")
-            check_bound("stages.until_day", self.until_day)
-        for key in ("surcharge_kPa", "drawdown_m"):
-            if getattr(self, key) is not None:
-                if not is_finite_number(getattr(self, key)) or getattr(self, key) == 0.0:
-                    raise ScenarioError(key, getattr(self, key), "must be a non-zero number",
-                                        _STAGE_UNITS[key])
-                check_bound(f"stages.{key}", getattr(self, key))
-        if self.area_m is not None:
-            x0, x1, y0, y1 = self.area_m
-            if not (is_finite_number(x0) and is_finite_number(x1) and x0 < x1
-                    and is_finite_number(y0) and is_finite_number(y1) and y0 < y1):
-                raise ScenarioError("area_m", list(self.area_m),
-                                    "must be [x_min, x_max, y_min, y_max] with x_min < x_max and"
-                                    " y_min < y_max", "m")
-
-
-    def _check_actions(self) -> None:
-        """A load stage gives its vertical load once; every action is a finite number in range."""
-        if self.kind == "load" and (self.cap_load_kN is None) == (self.Fz_kN is None):
-            given = self.cap_load_kN if self.cap_load_kN is not None else self.Fz_kN
-            raise ScenarioError("cap_load_kN", given, "give the vertical load of a load stage "
-                                "once: cap_load_kN (downward) or Fz_kN (z up), not "
-                                + ("both" if given is not None else "neither"), "kN")
-        for key in ACTION_KEYS:
-            value = getattr(self, key)
-            if value is None:
-                continue
-            require_finite(key, value, _STAGE_UNITS[key])
-            check_bound("stages.force_kN" if key.endswith("_kN") else "stages.moment_kNm",
-                        value, key)
-        if self.Fz_kN is not None and self.Fz_kN > 0.0:
-            raise ScenarioError("Fz_kN", self.Fz_kN, "must be <= 0 (z is up: a downward load is"
-                                " negative; uplift of the foundation is not modelled)", "kN")
-
-    def given_actions(self) -> tuple[float | None, ...]:
-        """Load stage: the six actions it gives, ``ACTION_KEYS`` order, ``Fz = -vertical``.
-
-        ``None`` where it gives none (the value before is held).
-        """
-        v = self.vertical_kN
-        return tuple((None if v is None else -v) if k == "Fz_kN" else getattr(self, k)
-                     for k in ACTION_KEYS)
-
-    @property
-    def vertical_kN(self) -> float | None:
-        """Load stage: the vertical load at its end, kN, downward positive (else ``None``)."""
-        if self.cap_load_kN is not None:
-            return self.cap_load_kN
-        return None if self.Fz_kN is None else -self.Fz_kN
+        if not self.base and self.mode != "tied":
+            raise ScenarioError("base", False, "only true (an interface under every pile base)"
+                                f" is modelled with mode = {self.mode!r}", "-")
 
 
 @dataclass(frozen=True)
@@ -228,7 +91,10 @@ class Time:
     """
 
     end_day: float
-    output_days: tuple[float, ...] = ()
+    """The last day of the analysis."""
+    output_days: tuple[float, ...] = field(default=(), metadata={
+        "allowed": "increasing, in [start_day, end_day]"})
+    """Days at which the fields and checkpoints are written, besides each stage's end."""
     start_day: float = 0.0
     """The geostatic state's day, <= 0 (negative: the ground moves before day 0)."""
 
@@ -258,17 +124,19 @@ class MeshOptions:
     keys it chose.
     """
 
-    size_m: float | None = None
+    size_m: float | None = field(default=None, metadata={
+        "allowed": "<= 5 x the thinnest pile's diameter"})
     """Plan size of the elements next to the piles, m: h of the paper's mesh study."""
-    far_field_size_m: float | None = None
+    far_field_size_m: float | None = field(default=None, metadata={"allowed": ">= size_m"})
     """Plan size the elements grow to away from the piles, m."""
     growth: float | None = None
     """Plan size growth ratio per element, in (1, 2]."""
-    n_circ_min: int | None = None
+    n_circ_min: int | None = field(default=None, metadata={"allowed": "a multiple of 4"})
     """At least this many element edges around a pile (a multiple of 4, >= 8)."""
     dz_surface_m: float | None = None
     """Vertical element size at the ground surface, m."""
-    dz_toe_m: float | None = None
+    dz_toe_m: float | None = field(default=None, metadata={
+        "allowed": "<= site.depth_m - the longest pile's length in soil"})
     """Vertical element size at the pile toes, m."""
     dz_max_m: float | None = None
     """Largest vertical element size down to the deepest toe, m."""
@@ -308,13 +176,13 @@ class MeshOptions:
                                 f"must be >= size_m = {self.size_m:g}", "m")
         for key in ("growth", "dz_growth"):
             if getattr(self, key) is not None:
-                require_in_range(key, getattr(self, key), 1.0, 2.0, "-", lo_open=True)
+                check_bound(f"numerics.mesh.{key}", getattr(self, key))
         if self.n_circ_min is not None:
             if self.n_circ_min < 8 or self.n_circ_min % 4:
                 raise ScenarioError("n_circ_min", self.n_circ_min,
                                     "must be a multiple of 4, >= 8", "-")
             check_bound("numerics.mesh.n_circ_min", self.n_circ_min)
-        require_in_range("scale", self.scale, 0.2, 5.0, "-")
+        check_bound("numerics.mesh.scale", self.scale)
         if self.min_layer_divisions is not None:
             if self.min_layer_divisions < 1:
                 raise ScenarioError("min_layer_divisions", self.min_layer_divisions,
@@ -326,9 +194,10 @@ class MeshOptions:
 class TimeStepping:
     """Adaptive backward-Euler stepping (day)."""
 
-    dt_initial_day: float = 0.5
+    dt_initial_day: float = field(default=0.5, metadata={
+        "allowed": "in [dt_min_day, dt_max_day]"})
     """First step, day."""
-    dt_min_day: float = 1.0e-4
+    dt_min_day: float = field(default=1.0e-4, metadata={"allowed": "<= time.end_day"})
     """Smallest step, day: the run stops when a cut-back would go below it."""
     dt_max_day: float = 20.0
     """Largest step, day."""
@@ -338,7 +207,7 @@ class TimeStepping:
     """Factor on the step after a failed step, in (0, 1)."""
     max_newton: int = 15
     """Newton iterations at most; a step that needs more fails (and is cut back)."""
-    easy_newton: int = 4
+    easy_newton: int = field(default=4, metadata={"allowed": "in [1, max_newton]"})
     """Newton iterations at most of an easy step, in [1, max_newton].
 
     After an easy step the next one grows by ``grow_factor``.
@@ -354,7 +223,7 @@ class TimeStepping:
         if not self.grow_factor >= 1.0:
             raise ScenarioError("grow_factor", self.grow_factor, "must be >= 1", "-")
         check_bound("numerics.time.grow_factor", self.grow_factor)
-        require_in_range("cut_factor", self.cut_factor, 0.0, 1.0, "-", lo_open=True, hi_open=True)
+        check_bound("numerics.time.cut_factor", self.cut_factor)
         if self.max_newton < 1:
             raise ScenarioError("max_newton", self.max_newton, "must be an integer >= 1")
         check_bound("numerics.time.max_newton", self.max_newton)
@@ -367,8 +236,7 @@ class TimeStepping:
 class LinearSolver:
     """PETSc linear solver: a named preset merged with user ``options``.
 
-    ``options`` are PETSc option names without the problem prefix. ``auto`` takes the preset
-    measured fastest for the system's model part, interface and size
+    ``auto`` takes the preset measured fastest for the system's model part, interface and size
     (``studies.run.auto_preset.AUTO_TABLE``, docs/solver.md); a failing ``fieldsplit_gamg``,
     ``fieldsplit_pier`` or ``fieldsplit_kept`` falls back to ``direct_reuse`` (a kept LU in
     single precision), which falls back to ``direct_reuse_double`` (the same in double);
@@ -385,8 +253,12 @@ class LinearSolver:
     preset: Literal["auto", "direct", "direct_reuse", "direct_reuse_double", "direct_reuse_ooc",
                     "direct_reuse_ooc_double", "fieldsplit_gamg", "fieldsplit_pier",
                     "fieldsplit_kept"] = "auto"
+    """The preset of PETSc options; ``auto``: the one measured fastest (docs/solver.md)."""
     options: dict[str, str | int | float | bool] = field(default_factory=dict)
+    """PETSc options (names without the problem prefix) over the preset's."""
     krylov_forcing: float = 0.1
+    """Inexact Newton: a Krylov solve stops at this fraction of Newton's tolerance; 0: at the
+    preset's."""
 
     def __post_init__(self) -> None:
         check_bound("numerics.solver.krylov_forcing", self.krylov_forcing)
@@ -420,9 +292,14 @@ class Numerics:
     """
 
     element: Literal["auto", "Q2Q1", "Q1Q1"] = "auto"
+    """The element pair: Taylor-Hood, trilinear (stabilised), or ``auto``: the one that fits."""
     newton_rtol: float = 1.0e-8
-    newton_atol: float = 1.0e-9
+    """Newton's tolerance relative to each block's reference residual."""
+    newton_atol: float = field(default=1.0e-9, metadata={"unit": "kN, m^3"})
+    """Newton's absolute tolerance, added to the relative one (kN; m^3 for the pressure)."""
     symmetry: Literal["auto", "none", "quarter", "half_x", "half_y"] = "auto"
+    """The part of the block modelled: all of it, a half or a quarter cut at mirror planes
+    x = 0 and y = 0; ``auto``: the smallest the scenario's symmetry allows."""
     mesh: MeshOptions = field(default_factory=MeshOptions)
     time: TimeStepping = field(default_factory=TimeStepping)
     solver: LinearSolver = field(default_factory=LinearSolver)
@@ -438,24 +315,21 @@ class Numerics:
 
 @dataclass(frozen=True)
 class Outputs:
-    """What to write.
-
-    ``gauge_depths_m``: depths below ground of the pile gauge sections, top down (strictly
-    increasing).
-
-    ``checkpoint_every_min``: a checkpoint every this many minutes of wall time as well, at
-    the next step boundary (0: only at the output times and on SIGTERM/SIGINT/SIGUSR1).
-
-    ``cap_stiffness``: at the end of the run, the loaded face's 6 x 6 stiffness matrix about the
-    action point (``cap_stiffness.csv``; docs/model.md, "Cap actions"): the model is then the
-    full one, with every action component on the face.
-    """
+    """What to write."""
 
     xdmf: bool = True
+    """The fields at every output time, as XDMF (ParaView)."""
     plots: bool = True
-    gauge_depths_m: tuple[float, ...] = ()
-    checkpoint_every_min: float = 0.0
+    """The report's figures at the end of the run (``plots/*.png``)."""
+    gauge_depths_m: tuple[float, ...] = field(default=(), metadata={
+        "allowed": "increasing, each >= 0 and <= the shortest pile's length in soil"})
+    """Depths below ground of the virtual strain gauge sections of every pile, top down."""
+    checkpoint_every_min: float = field(default=0.0, metadata={"allowed": ">= 0"})
+    """A checkpoint every this many minutes of wall time as well, at the next step boundary
+    (0: only at the output times and on SIGTERM/SIGINT/SIGUSR1)."""
     cap_stiffness: bool = False
+    """At the end, the loaded face's 6 x 6 stiffness matrix about the action point
+    (``cap_stiffness.csv``, docs/model.md, "Cap actions"); the model is then the full one."""
 
     def __post_init__(self) -> None:
         for i, z in enumerate(self.gauge_depths_m):

@@ -33,6 +33,8 @@ _K = ("impervious clay to clean gravel, Terzaghi & Peck: 1e-6 to 1e3 m/day, with
       "below for practically undrained studies")
 _DZ = "1 cm resolves any layer the model accepts; 100 m exceeds any layer or block depth"
 _DT = "1e-9 day (0.1 ms) to time.end_day's limit"
+_NU = "an isotropic elastic solid; 0.5 would be incompressible"
+_GROWTH = "element sizes grow away from the piles, at most doubling from one to the next"
 _PILE_D = Bound(0.1, 5.0, "m", "bored and driven piles: micropiles 0.1 m to large bored piles 5 m")
 _PILE_L = Bound(1.0, 150.0, "m", "bored and driven piles in practice: up to ~150 m")
 
@@ -46,6 +48,35 @@ BOUNDS: dict[str, Bound] = {
                                 "a thinner stratum is a lens, not a layer; at most site.depth_m"),
     "layers.gamma_kN_per_m3": Bound(10.0, 25.0, "kN/m^3",
                                     "saturated soils: peat ~10-12, dense gravel and rockfill ~23"),
+    "layers.gamma_unsat_kN_per_m3": Bound(5.0, 25.0, "kN/m^3",
+                                          "soils above the water table: dry peat ~5-10, dry"
+                                          " or moist sand and clay ~14-20, dense gravel ~22"),
+    "layers.K0": Bound(0.0, 3.0, "-", "normally consolidated sand ~0.4 to heavily"
+                       " over-consolidated clay ~2-3, near its passive limit", lo_open=True),
+    "layers.OCR": Bound(1.0, 100.0, "-", "normally consolidated (1) to heavily"
+                        " over-consolidated clays (~30-50)"),
+    "layers.piezometric_depth_m": Bound(-100.0, 500.0, "m", "artesian heads up to tens of"
+                                        " metres above the ground; at most site.depth_m's"
+                                        " limit below it"),
+    "layers.POP_kPa": Bound(0.0, 1000.0, "kPa", "aged or eroded soft clays ~10-100 kPa; 1 MPa"
+                            " bounds any pre-loading of a soil the model's laws are for"),
+    "layers.lam": Bound(0.0, 2.0, "-", "lambda = Cc/ln 10: stiff clays ~0.05 to peats ~1.5"
+                        " (Wood 1990)", lo_open=True),
+    "layers.kappa": Bound(0.0, 1.0, "-", "kappa ~ lambda/10 to lambda/3 (Wood 1990)",
+                          lo_open=True),
+    "layers.M": Bound(0.0, 3.0, "-", "critical-state q/p' of soils ~0.6-1.8; 3 is"
+                      " phi = 90 degrees in triaxial compression", lo_open=True, hi_open=True),
+    "layers.phi_cs_deg": Bound(0.0, 60.0, "degree", "critical-state friction angles: clays"
+                               " ~15-35, sands ~30-40 degrees", lo_open=True, hi_open=True),
+    "layers.lambda_star": Bound(0.0, 1.0, "-", "lambda* = lambda/(1 + e): stiff clays ~0.02 to"
+                                " peats ~0.3 (PLAXIS Material Models manual)", lo_open=True),
+    "layers.kappa_star": Bound(0.0, 0.5, "-", "kappa* ~ lambda*/10 to lambda*/3 (PLAXIS"
+                               " Material Models manual)", lo_open=True),
+    "layers.mu_star": Bound(0.0, 0.1, "-", "mu* ~ lambda*/25 to lambda*/15: ~1e-3 to 2e-2 in"
+                            " soft clays and peats (Vermeer & Neher 1999)", lo_open=True),
+    "layers.nu_ur": Bound(0.0, 0.5, "-", _NU, lo_open=True, hi_open=True),
+    "layers.tau_ref_day": Bound(1e-3, 1e3, "day", "the duration of the oedometer's load steps"
+                                " lambda* and mu* come from: 1 day for the standard 24 h test"),
     "layers.E_MPa": Bound(0.1, 1.0e5, "MPa", _SOIL_E),
     "layers.c_kPa": Bound(0.0, 1000.0, "kPa", "clean sand (0) to hard clay and weak rock (~1 MPa)"),
     "layers.k_m_per_day": Bound(1.0e-12, 1.0e3, "m/day", _K),
@@ -133,6 +164,24 @@ BOUNDS: dict[str, Bound] = {
                                       "8 edges: 10 % area error; 256: 0.01 %, finer is waste"),
     "numerics.mesh.min_layer_divisions": Bound(1, 100, "-",
                                                "more elements per layer come from dz_* instead"),
+    # intervals the physics or the method gives
+    "layers.nu": Bound(0.0, 0.5, "-", _NU, lo_open=True, hi_open=True),
+    "structure.nu": Bound(0.0, 0.5, "-", _NU, lo_open=True, hi_open=True),
+    "layers.phi_deg": Bound(0.0, 60.0, "degree", "undrained clay (0) to dense gravel and"
+                            " rockfill (~50)", hi_open=True),
+    "layers.interface.delta_deg": Bound(0.0, 60.0, "degree", "an interface without friction"
+                                        " carries no shear; at most a soil's friction angle",
+                                        lo_open=True, hi_open=True),
+    "layers.interface.R_f": Bound(0.0, 1.0, "-", "Clough-Duncan failure ratios ~0.5-0.9"
+                                  " (paper: 0.08-0.28); 0: linear shear springs", hi_open=True),
+    "numerics.mesh.growth": Bound(1.0, 2.0, "-", _GROWTH, lo_open=True),
+    "numerics.mesh.dz_growth": Bound(1.0, 2.0, "-", _GROWTH, lo_open=True),
+    "numerics.mesh.scale": Bound(0.2, 5.0, "-", "a refinement study: five times finer to five"
+                                 " times coarser than the automatic mesh"),
+    "numerics.time.cut_factor": Bound(0.0, 1.0, "-", "a failed step is tried again smaller",
+                                      lo_open=True, hi_open=True),
+    "stages.plunging_stiffness_ratio": Bound(0.0, 1.0, "-", "a fraction of the initial"
+                                             " stiffness", lo_open=True, hi_open=True),
 }
 
 

@@ -4,7 +4,7 @@ The loader walks the dataclass type hints: unknown keys, missing keys and wrong 
 rejected with the dotted key path (``layers[3].E_MPa``); range rules live in the dataclasses'
 ``__post_init__`` and get the same path prefixed here. A dataclass with a classmethod
 ``unknown_key_message(key)`` says itself what is wrong with an unknown key (a pile layout entry
-rejects a rake: :class:`~pilegroup.model.site.LayoutPile`).
+rejects a rake: :class:`~pilegroup.model.piles.LayoutPile`).
 """
 
 from __future__ import annotations

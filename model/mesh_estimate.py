@@ -10,7 +10,7 @@ The mesh is plan quads extruded down through the layers (docs/geometry.md), so t
   (``a = growth - 1``), and the rest of the block holds ``area / h_far^2``;
 * vertical: the same graded integral of ``1 / dz`` from the ground surface and the pile toes
   (every distinct toe level), plus ``min_layer_divisions + 1`` per slab (rounding up per
-  layer, toe cut and cap).
+  layer, toe cut, water table and cap).
 
 The product times :data:`SAFETY` is above the real cell count of the whole model by 1.3-3x
 for the bundled scenarios and the benchmark meshes (h = 0.1-1 m; ``tests/model/test_fuzz.py``
@@ -25,7 +25,8 @@ from collections import Counter
 from typing import Protocol
 
 from pilegroup.model.analysis import Numerics
-from pilegroup.model.site import Cap, Layer, Piles, Site
+from pilegroup.model.piles import Piles
+from pilegroup.model.site import Cap, Layer, Site
 
 
 class EstimatedScenario(Protocol):
@@ -105,7 +106,7 @@ def element_layers(sc: EstimatedScenario) -> float:
               + graded_count((toe - top) / 2, m.dz_toe_m, m.dz_max_m, m.dz_growth))
         top, first = toe, m.dz_toe_m
     n += graded_count(depth - top, m.dz_toe_m, m.dz_max_deep_m, m.dz_growth)
-    slabs = len(sc.layers) + len(toes)
+    slabs = len(sc.layers) + len(toes) + (sc.site.water_table_depth_m > 0.0)  # its surface
     if sc.cap is not None:
         n += sc.cap.thickness_m / m.dz_cap_m
         slabs += 2

@@ -1,10 +1,10 @@
 """The scenario: a frozen, typed, validated description of one pile-group analysis.
 
 :class:`Scenario` gathers the parts defined in :mod:`pilegroup.model.site` (soil block, layers,
-piles, cap, structure) and :mod:`pilegroup.model.analysis` (options, stages, time, numerics,
-outputs), checks the rules that tie the parts together, and derives layer depths and stage
-times. Errors are :class:`~pilegroup.errors.ScenarioError` naming the key, value, unit and what
-is allowed.
+cap, structure), :mod:`pilegroup.model.piles`, :mod:`pilegroup.model.stages` and
+:mod:`pilegroup.model.analysis` (options, time, numerics, outputs), checks the rules that tie
+the parts together, and derives layer depths and stage times. Errors are
+:class:`~pilegroup.errors.ScenarioError` naming the key, value, unit and what is allowed.
 """
 
 from __future__ import annotations
@@ -15,19 +15,15 @@ import numpy as np
 
 from pilegroup.errors import ScenarioError
 from pilegroup.model.actions import LATERAL, Actions, held_actions, transfer
-from pilegroup.model.analysis import (
-    ACTION_KEYS,
-    InterfaceOptions,
-    Numerics,
-    Outputs,
-    Soil,
-    Stage,
-    Time,
-)
+from pilegroup.model.analysis import InterfaceOptions, Numerics, Outputs, Soil, Time
+from pilegroup.model.insitu import check_groundwater, vertical_effective_stress
+from pilegroup.model.law_rules import check_all as check_law_inputs
 from pilegroup.model.mesh_defaults import describe, locking_warning, resolve_numerics
 from pilegroup.model.mesh_estimate import MAX_CELLS, estimated_cells
-from pilegroup.model.site import Cap, Layer, Piles, Site, Structure
-from pilegroup.model.units import GAMMA_WATER
+from pilegroup.model.piles import Piles
+from pilegroup.model.site import Cap, Layer, Site, Structure
+from pilegroup.model.soil_models import layer_model
+from pilegroup.model.stages import ACTION_KEYS, Stage
 
 
 @dataclass(frozen=True)
@@ -35,6 +31,7 @@ class Scenario:
     """A whole analysis: site, layers, piles, cap, materials, interface, stages, time, numerics."""
 
     name: str
+    """The scenario's name: the default output folder is ``out/<name>``."""
     site: Site
     layers: tuple[Layer, ...]
     piles: Piles
@@ -48,6 +45,7 @@ class Scenario:
     outputs: Outputs = field(default_factory=Outputs)
     actions: Actions = field(default_factory=Actions)
     description: str = ""
+    """What the scenario is, in words."""
 
     def __post_init__(self) -> None:
         self._resolve_numerics()
@@ -56,8 +54,10 @@ class Scenario:
         self._check_cap()
         self._check_stages()
         self._check_installation()
+        check_groundwater(self.site, self.layers, self.stages)
         self._check_excess_pore_pressure()
         self._check_interfaces()
+        check_law_inputs(self)
         self._check_gauges()
         self._check_numerics()
         self._check_actions()
@@ -79,7 +79,8 @@ class Scenario:
         """
         if self.has_lateral_actions():
             return "horizontal actions bend the piles"
-        if self.capacity_stage is not None and self.soil.model != "linear_elastic":
+        if self.capacity_stage is not None and any(
+                layer_model(lay, self.soil) != "linear_elastic" for lay in self.layers):
             return "a capacity stage drives the plastic soil to failure"
         return None
 
@@ -148,23 +149,24 @@ class Scenario:
         (``pilegroup.geometry.plan.cell_grid``) needs that room.
         """
         half_x, half_y = self.site.size_x_m / 2, self.site.size_y_m / 2
-        for i, ((x, y), d) in enumerate(zip(self.piles.xy, self.piles.diameters, strict=True)):
+        for n, ((x, y), d) in enumerate(zip(self.piles.xy, self.piles.diameters, strict=True),
+                                        start=1):
             r = d / 2
+            key = self.piles.position_key(n)
+            pile = "the pile" if key != "piles.grid" else f"pile {n}"
             if abs(x) + r > half_x or abs(y) + r > half_y:
-                raise ScenarioError(f"piles[{i + 1}] position", [x, y],
-                                    "pile lies outside the soil block", "m")
+                raise ScenarioError(key, [x, y], f"{pile} lies outside the soil block", "m")
             if self.cap is None:
                 continue
             clear = min(self.cap.size_x_m / 2 - abs(x), self.cap.size_y_m / 2 - abs(y)) - r
             if clear < -1e-12:
-                raise ScenarioError(f"piles[{i + 1}] position", [x, y],
-                                    f"pile (diameter {d:g} m) lies outside the"
+                raise ScenarioError(key, [x, y], f"{pile} (diameter {d:g} m) lies outside the"
                                     f" cap ({self.cap.size_x_m:g} x {self.cap.size_y_m:g} m)", "m")
             if clear < 0.2 * r:
-                raise ScenarioError(f"piles[{i + 1}] position", [x, y],
-                                    f"leaves only {clear:.3g} m to the cap edge: need >= 0.2 x the"
-                                    f" radius = {0.2 * r:g} m for the structured mesh around the"
-                                    " pile", "m")
+                raise ScenarioError(key, [x, y],
+                                    f"{pile} leaves only {clear:.3g} m to the cap edge: need >="
+                                    f" 0.2 x the radius = {0.2 * r:g} m for the structured mesh"
+                                    " around the pile", "m")
 
     def _check_cap(self) -> None:
         """The cap fits the block in plan and holds the embedded pile heads."""
@@ -199,13 +201,13 @@ class Scenario:
         if "installation" in kinds[i + 1:]:
             j = kinds.index("installation", i + 1)
             raise ScenarioError(f"stages[{j}].kind", "installation",
-                                f"the piles are installed once (stages[{i}] already installs"
-                                " them)")
+                                f"the piles are installed once (stage {i + 1}, stages[{i}],"
+                                " already installs them)")
         if "load" in kinds[:i]:
             j = kinds.index("load")
             raise ScenarioError(f"stages[{j}].kind", "load",
                                 f"a cap load before the piles exist: put it after the"
-                                f" installation stage stages[{i}]")
+                                f" installation stage, stage {i + 1} (stages[{i}])")
         if self.interface.mode == "tied":
             raise ScenarioError("interface.mode", "tied",
                                 "an installation stage needs interface.mode 'elastic' or"
@@ -249,7 +251,7 @@ class Scenario:
         i = kinds.index("capacity")
         if i != len(kinds) - 1:
             raise ScenarioError(f"stages[{i}].kind", "capacity",
-                                f"must be the last stage (stages[{i + 1}] follows it): the"
+                                f"must be the last stage (stage {i + 2} follows it): the"
                                 " foundation has failed at its end")
         st = self.stages[i]
         before = [s.vertical_kN for s in self.stages[:i] if s.kind == "load"]
@@ -269,15 +271,20 @@ class Scenario:
                                 f" y in [{-hy:g}, {hy:g}]", "m")
 
     def _check_excess_pore_pressure(self) -> None:
-        """A layer's initial excess pore pressure leaves its effective stress compressive."""
+        """A layer's initial excess pore pressure leaves its effective stress compressive.
+
+        It acts below the water table only: the layer's top, or the water table in it.
+        """
         for i, layer in enumerate(self.layers):
-            sv = self.vertical_effective_stress(self.layer_top(i))
+            sv = self.vertical_effective_stress(max(self.layer_top(i),
+                                                    self.site.water_table_depth_m))
             if layer.excess_pore_pressure_kPa > sv + 1e-9:
                 raise ScenarioError(f"layers[{i}].excess_pore_pressure_kPa",
                                     layer.excess_pore_pressure_kPa,
-                                    f"must be <= the vertical effective stress at the layer's top"
-                                    f" ({sv:.4g} kPa), or the soil would start with tensile"
-                                    " effective stress; use excess_pore_pressure_ratio", "kPa")
+                                    f"must be <= the vertical effective stress at the layer's"
+                                    f" top ({sv:.4g} kPa; at the water table if it lies in the"
+                                    " layer), or the soil would start with tensile effective"
+                                    " stress; use excess_pore_pressure_ratio", "kPa")
 
     def _check_interfaces(self) -> None:
         """Every layer the piles cross has interface parameters, unless the piles are tied.
@@ -372,12 +379,11 @@ class Scenario:
     def vertical_effective_stress(self, depth: float) -> float:
         """In-situ vertical effective stress (kPa, compression positive) at ``depth`` (m).
 
-        Hydrostatic pore pressure from the ground surface; the layers' initial excess pore
-        pressure is not taken off.
+        Hydrostatic pore pressure below the water table, the layers' weight above it
+        (:mod:`pilegroup.model.insitu`); the layers' initial excess pore pressure is not taken
+        off.
         """
-        return sum((layer.gamma_kN_per_m3 - GAMMA_WATER)
-                   * max(min(self.layer_bottom(j), depth) - self.layer_top(j), 0.0)
-                   for j, layer in enumerate(self.layers))
+        return vertical_effective_stress(self.site, self.layers, depth)
 
     def layer_depths(self) -> tuple[float, ...]:
         """Depths (m, positive down) of all layer boundaries, from 0 to the block depth."""

@@ -1,41 +1,41 @@
-"""The ground and what stands in it: soil block, layers, piles, cap, structural material.
+"""The ground and what stands on it: soil block, layers, cap, structural material.
 
 Field names are the TOML keys, so they carry their unit (``E_MPa``, ``k_m_per_day``); properties
 without a unit suffix return internal units (kN, m, day; stresses in kPa). Validation happens
 when a dataclass is built (:mod:`pilegroup.validate`); errors are
 :class:`~pilegroup.errors.ScenarioError` naming the key, value, unit and what is allowed.
 Geometry: plan centred at x = y = 0, ground surface z = 0, z up; the cap sits on the ground
-surface, centred on the plan origin.
+surface, centred on the plan origin. The piles are in :mod:`pilegroup.model.piles`.
 
 A layer's interface friction angle defaults to the paper's Eq. 17, which lives with the laws in
-:mod:`pilegroup.constitutive.paper`: the model's one import from ``constitutive``, a pure
-formula on floats (no numpy, no law), so that the formula is written once.
+:mod:`pilegroup.constitutive.paper`, a pure formula on floats (no numpy, no law), so that
+the formula is written once (:mod:`pilegroup.model.soil_models` takes the Soft Soil Creep
+ellipse's formula from the laws likewise).
 """
 
 from __future__ import annotations
 
-import dataclasses
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from pilegroup.constitutive.paper import delta_eq17
 from pilegroup.errors import ScenarioError
-from pilegroup.model.bounds import check_bound
+from pilegroup.model.analysis import INTERFACE_LAWS, PLASTIC_SOILS, SoilModel
+from pilegroup.model.bounds import BOUNDS, check_bound
+from pilegroup.model.soil_models import check_critical_state_keys, friction_for_k0
 from pilegroup.model.units import KPA_PER_MPA, unit_weight_from_density
 from pilegroup.validate import (
-    require_finite,
     require_in_range,
     require_non_negative,
     require_positive,
 )
 
-#: At most this many piles: the mesh names its pile groups ``pile_1`` .. ``pile_99``
-#: (``pilegroup.geometry.groups``), and the overlap check is quadratic in the count.
-MAX_PILES = 99
-
-
-def _require_friction_angle(key: str, value: float) -> None:
-    require_in_range(key, value, 0.0, 60.0, "degree", hi_open=True)
+#: A layer's strength keys: the plastic soil models use them, and so does the layer's
+#: interface law (its yield cone; Eq. 17's delta_deg).
+_STRENGTH = {"soil_models": PLASTIC_SOILS, "interface_modes": INTERFACE_LAWS}
+#: Keys of one critical-state model (required where it is used); ``optional``: used, not required.
+_MCC, _SSC = {"soil_models": ("modified_cam_clay",)}, {"soil_models": ("soft_soil_creep",)}
+_CRITICAL_OPTIONAL = {"soil_models": ("modified_cam_clay", "soft_soil_creep"), "optional": True}
 
 
 class _ElasticMPa:
@@ -47,7 +47,7 @@ class _ElasticMPa:
     def _check_elastic(self, table: str) -> None:
         require_positive("E_MPa", self.E_MPa, "MPa")
         check_bound(f"{table}.E_MPa", self.E_MPa)
-        require_in_range("nu", self.nu, 0.0, 0.5, "-", lo_open=True, hi_open=True)
+        check_bound(f"{table}.nu", self.nu)
 
     @property
     def E(self) -> float:
@@ -67,30 +67,41 @@ class InterfaceParams:
     """
 
     K: float
+    """Modulus number of the hyperbolic shear stiffness (Clough & Duncan, Eq. 6)."""
     n: float
+    """Exponent of the shear stiffness on the normal stress (Eq. 6)."""
     R_f: float
-    eta_MPa_day: float
+    """Failure ratio of the hyperbola (Eq. 7); 0: linear shear springs."""
+    eta_MPa_day: float | None = field(default=None,
+                                      metadata={"interface_modes": ("viscoplastic",)})
+    """Viscosity of the viscoplastic slip, MPa·day per m of slip (docs/model.md, item 3);
+    required where the interface is viscoplastic."""
     delta_deg: float | None = None
-    base_bearing_kPa: float | None = None
+    """Interface friction angle, degrees; not set: Eq. 17 from the layer's ``phi_deg``."""
+    base_bearing_kPa: float | None = field(default=None, metadata={
+        "allowed": "> the in-situ vertical effective stress at the toes in the layer"})
+    """Ultimate base resistance of a pile whose toe stands in this layer, kPa; not set: the
+    soil below the toe alone limits it."""
 
     def __post_init__(self) -> None:
         require_positive("K", self.K, "-")
         check_bound("layers.interface.K", self.K)
         require_non_negative("n", self.n, "-")
         check_bound("layers.interface.n", self.n)
-        require_in_range("R_f", self.R_f, 0.0, 1.0, "-", hi_open=True)
-        require_positive("eta_MPa_day", self.eta_MPa_day, "MPa·day/m")
-        check_bound("layers.interface.eta_MPa_day", self.eta_MPa_day)
+        check_bound("layers.interface.R_f", self.R_f)
+        if self.eta_MPa_day is not None:
+            require_positive("eta_MPa_day", self.eta_MPa_day, "MPa·day/m")
+            check_bound("layers.interface.eta_MPa_day", self.eta_MPa_day)
         if self.delta_deg is not None:
-            _require_friction_angle("delta_deg", self.delta_deg)
+            check_bound("layers.interface.delta_deg", self.delta_deg)
         if self.base_bearing_kPa is not None:
             require_positive("base_bearing_kPa", self.base_bearing_kPa, "kPa")
             check_bound("layers.interface.base_bearing_kPa", self.base_bearing_kPa)
 
     @property
-    def eta(self) -> float:
-        """Viscosity in kPa·day/m."""
-        return self.eta_MPa_day * KPA_PER_MPA
+    def eta(self) -> float | None:
+        """Viscosity in kPa·day/m (None: not given, an elastic interface has none)."""
+        return None if self.eta_MPa_day is None else self.eta_MPa_day * KPA_PER_MPA
 
 
 @dataclass(frozen=True)
@@ -105,10 +116,6 @@ class Layer(_ElasticMPa):
     """Young's modulus of the soil skeleton, MPa."""
     nu: float
     """Poisson's ratio, in (0, 0.5)."""
-    phi_deg: float
-    """Friction angle, degrees, in [0, 60)."""
-    c_kPa: float
-    """Cohesion, kPa."""
     k_m_per_day: float
     """Hydraulic conductivity, m/day (the vertical one when ``k_h_m_per_day`` is given).
 
@@ -116,13 +123,21 @@ class Layer(_ElasticMPa):
     """
     e0: float
     """Initial void ratio."""
+    phi_deg: float | None = field(default=None, metadata=_STRENGTH | {
+        "soil_models": (*PLASTIC_SOILS, "soft_soil_creep")})
+    """Friction angle, degrees: with ``c_kPa`` the soil's strength, which the plastic soil
+    models and the layer's interface law use (required where they are)."""
+    c_kPa: float | None = field(default=None, metadata=_STRENGTH)
+    """Cohesion, kPa (required where ``phi_deg`` is)."""
     thickness_m: float | None = None
     """Thickness, m; the last layer may omit it and then reaches the block bottom."""
-    psi_deg: float = 0.0
-    """Dilatancy angle, degrees, in [0, phi_deg]."""
+    psi_deg: float = field(default=0.0, metadata={"soil_models": PLASTIC_SOILS,
+                                                  "allowed": "in [0, phi_deg]"})
+    """Dilatancy angle, degrees."""
     k_h_m_per_day: float | None = None
     """Horizontal hydraulic conductivity, m/day; None: equal to ``k_m_per_day``."""
-    interface: InterfaceParams | None = None
+    interface: InterfaceParams | None = field(default=None,
+                                              metadata={"interface_modes": INTERFACE_LAWS})
     """Pile-soil interface parameters; needed where the piles cross the layer (not tied)."""
     excess_pore_pressure_ratio: float = 0.0
     """Excess pore pressure at the start, as a fraction of the vertical effective stress it will
@@ -134,6 +149,55 @@ class Layer(_ElasticMPa):
     """An aquifer: its pore water drains to far away (a sand or gravel layer open to the
     region), so its excess pore pressure stays the water table's (0, or that of a lowered
     water table): the layers around it consolidate towards it."""
+    gamma_unsat_kN_per_m3: float | None = field(default=None,
+                                                metadata={"allowed": "<= gamma_kN_per_m3"})
+    """Unit weight above the water table, kN/m^3 (total: dry or moist soil); None: equal to
+    ``gamma_kN_per_m3``. At most ``gamma_kN_per_m3``."""
+    K0: float | None = field(default=None, metadata={"allowed": "not with OCR"})
+    """Coefficient of earth pressure at rest, in (0, 3]: the in-situ horizontal effective stress
+    over the vertical one; None: from ``OCR`` (Mayne & Kulhawy 1982), else ``1 - sin(phi)``
+    (``nu / (1 - nu)`` for a layer without ``phi_deg``)."""
+    OCR: float | None = None
+    """Over-consolidation ratio, >= 1: ``K0 = (1 - sin phi) OCR^sin(phi)`` (Mayne & Kulhawy
+    1982) and, in the critical-state models, the pre-consolidation stress ``OCR sigma'_v0``.
+    Not with ``K0``."""
+    piezometric_depth_m: float | None = field(default=None, metadata={
+        "allowed": "a layer below the water table with one the water seeps through between it"
+                   " and the water table (or another held layer); not with drained or an"
+                   " initial excess pore pressure"})
+    """Depth of the piezometric level of the layer's pore water below the ground surface, m
+    (negative: above it, an artesian head): an aquifer whose head the region holds, under-drained
+    or artesian; the layers between it and the water table seep steadily. None: the water
+    table's hydrostatic pressure, or that seepage (docs/model.md, "The ground at rest")."""
+    model: SoilModel | None = None
+    """The layer's soil law; not set: ``soil.model`` (docs/model.md, "Soil models per layer")."""
+    lam: float | None = field(default=None, metadata=_MCC | {"allowed": "> kappa"})
+    """Modified Cam Clay: slope lambda of the normal compression line, void ratio against ln p'."""
+    kappa: float | None = field(default=None, metadata=_MCC | {"allowed": "< lam"})
+    """Modified Cam Clay: slope kappa of the unloading-reloading line, void ratio against ln p'."""
+    M: float | None = field(default=None, metadata=_MCC | {
+        "optional": True, "allowed": "one of M and phi_cs_deg"})
+    """Modified Cam Clay: critical-state stress ratio q/p' (or ``phi_cs_deg``)."""
+    phi_cs_deg: float | None = field(default=None, metadata=_MCC | {
+        "optional": True, "allowed": "one of M and phi_cs_deg"})
+    """Modified Cam Clay: critical-state friction angle, degrees, ``M = 6 sin phi/(3 - sin
+    phi)`` (or ``M``)."""
+    POP_kPa: float | None = field(default=None, metadata=_CRITICAL_OPTIONAL | {
+        "allowed": "not with OCR"})
+    """Pre-overburden pressure of the critical-state models, kPa: the vertical pre-consolidation
+    stress is ``sigma'_v0 + POP_kPa`` (with ``OCR`` instead ``OCR sigma'_v0``; neither:
+    ``sigma'_v0``, normally consolidated)."""
+    lambda_star: float | None = field(default=None, metadata=_SSC | {"allowed": "> kappa_star"})
+    """Soft Soil Creep: modified compression index lambda*, volumetric strain against ln p'."""
+    kappa_star: float | None = field(default=None, metadata=_SSC | {"allowed": "< lambda_star"})
+    """Soft Soil Creep: modified swelling index kappa*, volumetric strain against ln p'."""
+    mu_star: float | None = field(default=None, metadata=_SSC)
+    """Soft Soil Creep: modified creep index mu*, the creep strain per unit of ln(time)."""
+    nu_ur: float = field(default=0.15, metadata=_SSC)
+    """Soft Soil Creep: Poisson's ratio of unloading and reloading (PLAXIS's default 0.15)."""
+    tau_ref_day: float = field(default=1.0, metadata=_SSC)
+    """Soft Soil Creep: reference time, day: the load steps of the oedometer test that gave
+    lambda* and mu* (1 day: the standard 24 h steps)."""
 
     def __post_init__(self) -> None:
         if not self.name.strip():
@@ -144,12 +208,7 @@ class Layer(_ElasticMPa):
         require_positive("gamma_kN_per_m3", self.gamma_kN_per_m3, "kN/m^3")
         check_bound("layers.gamma_kN_per_m3", self.gamma_kN_per_m3)
         self._check_elastic("layers")
-        _require_friction_angle("phi_deg", self.phi_deg)
-        require_non_negative("c_kPa", self.c_kPa, "kPa")
-        check_bound("layers.c_kPa", self.c_kPa)
-        if not 0.0 <= self.psi_deg <= self.phi_deg:
-            raise ScenarioError("psi_deg", self.psi_deg,
-                                f"must be in [0, phi_deg = {self.phi_deg}]", "degree")
+        self._check_strength()
         for key in ("k_m_per_day", "k_h_m_per_day", "e0"):
             if getattr(self, key) is not None:
                 require_positive(key, getattr(self, key), "-" if key == "e0" else "m/day")
@@ -162,6 +221,57 @@ class Layer(_ElasticMPa):
             raise ScenarioError("excess_pore_pressure_kPa", self.excess_pore_pressure_kPa,
                                 "give either excess_pore_pressure_ratio or"
                                 " excess_pore_pressure_kPa, not both", "kPa")
+        self._check_at_rest()
+        check_critical_state_keys(self)
+
+    def _check_at_rest(self) -> None:
+        """The keys of the ground at rest: unit weight above water, K0 or OCR, head.
+
+        The piezometric level is not with ``drained`` or an initial excess pore pressure.
+        """
+        if self.piezometric_depth_m is not None:
+            check_bound("layers.piezometric_depth_m", self.piezometric_depth_m)
+            for key in ("drained", "excess_pore_pressure_ratio", "excess_pore_pressure_kPa"):
+                if getattr(self, key):
+                    raise ScenarioError("piezometric_depth_m", self.piezometric_depth_m,
+                                        f"not with {key}: a layer with a piezometric level of"
+                                        " its own holds its pore pressure there", "m")
+        if self.gamma_unsat_kN_per_m3 is not None:
+            check_bound("layers.gamma_unsat_kN_per_m3", self.gamma_unsat_kN_per_m3)
+            if self.gamma_unsat_kN_per_m3 > self.gamma_kN_per_m3:
+                raise ScenarioError("gamma_unsat_kN_per_m3", self.gamma_unsat_kN_per_m3,
+                                    f"must be <= gamma_kN_per_m3 = {self.gamma_kN_per_m3:g} (a"
+                                    " soil weighs most when saturated)", "kN/m^3")
+        if self.K0 is not None:
+            check_bound("layers.K0", self.K0)
+        if self.OCR is not None:
+            check_bound("layers.OCR", self.OCR)
+            if self.K0 is not None:
+                raise ScenarioError("OCR", self.OCR, "give either K0 or OCR, not both", "-")
+            top = BOUNDS["layers.K0"].hi
+            if self.k0 > top:
+                raise ScenarioError("OCR", self.OCR, f"gives K0 = (1 - sin phi) OCR^sin(phi) ="
+                                    f" {self.k0:.4g}, must give K0 <= {top:g} (layers.K0's"
+                                    " range): a smaller OCR, or K0", "-")
+
+    def _check_strength(self) -> None:
+        """``phi_deg``, ``c_kPa`` where given and ``psi_deg`` in range.
+
+        Whether a scenario needs them is its rule
+        (:func:`pilegroup.model.law_rules.check_strength_keys`).
+        """
+        if self.phi_deg is not None:
+            check_bound("layers.phi_deg", self.phi_deg)
+        if self.c_kPa is not None:
+            require_non_negative("c_kPa", self.c_kPa, "kPa")
+            check_bound("layers.c_kPa", self.c_kPa)
+        phi = 0.0 if self.phi_deg is None else self.phi_deg
+        if not 0.0 <= self.psi_deg <= phi:
+            raise ScenarioError("psi_deg", self.psi_deg, f"must be in [0, phi_deg = {phi:g}]",
+                                "degree")
+        if self.OCR is not None and friction_for_k0(self) is None:
+            raise ScenarioError("OCR", self.OCR, "needs phi_deg (K0 = (1 - sin phi) OCR^sin(phi))"
+                                ": give phi_deg (or phi_cs_deg or M), or K0 instead", "-")
 
     @property
     def porosity(self) -> float:
@@ -169,9 +279,27 @@ class Layer(_ElasticMPa):
         return self.e0 / (1.0 + self.e0)
 
     @property
-    def K0(self) -> float:
-        """Earth pressure coefficient at rest, Jaky: 1 - sin(phi)."""
-        return 1.0 - math.sin(math.radians(self.phi_deg))
+    def k0(self) -> float:
+        """Coefficient of earth pressure at rest, the one the ground starts at.
+
+        ``K0`` if given, else Mayne & Kulhawy (1982) ``(1 - sin phi) OCR^sin(phi)`` (``OCR`` 1
+        when absent: Jaky's ``1 - sin phi``); phi is Modified Cam Clay's critical-state angle
+        (``phi_cs_deg`` or ``M``), else ``phi_deg`` (:func:`~.soil_models.friction_for_k0`).
+        """
+        if self.K0 is not None:
+            return self.K0
+        phi = friction_for_k0(self)
+        if phi is None:  # no strength keys (linear elastic): the elastic ratio
+            return self.nu / (1.0 - self.nu)
+        s = math.sin(math.radians(phi))
+        return (1.0 - s) * (self.OCR or 1.0) ** s
+
+    @property
+    def gamma_unsat(self) -> float:
+        """Unit weight above the water table, kN/m^3 (``gamma_kN_per_m3`` unless given)."""
+        if self.gamma_unsat_kN_per_m3 is None:
+            return self.gamma_kN_per_m3
+        return self.gamma_unsat_kN_per_m3
 
     @property
     def k_h(self) -> float:
@@ -183,7 +311,7 @@ class Layer(_ElasticMPa):
         """Interface friction angle: Table 1 value if given, else Eq. 17 from phi."""
         if self.interface is not None and self.interface.delta_deg is not None:
             return self.interface.delta_deg
-        return delta_eq17(self.phi_deg)
+        return delta_eq17(self.phi_deg or 0.0)
 
 
 @dataclass(frozen=True)
@@ -191,7 +319,9 @@ class _PlanRectangle:
     """A rectangle in plan centred on the origin, ``size_x_m`` x ``size_y_m`` (m)."""
 
     size_x_m: float
+    """Size in plan along x, m, centred on the plan origin."""
     size_y_m: float
+    """Size in plan along y, m, centred on the plan origin."""
 
     def _check_plan_size(self, table: str) -> None:
         for key in ("size_x_m", "size_y_m"):
@@ -204,257 +334,18 @@ class Site(_PlanRectangle):
     """The soil block: plan size, depth, water table (depth below ground, m)."""
 
     depth_m: float
-    water_table_depth_m: float = 0.0
+    """Depth of the soil block below the ground surface, m."""
+    water_table_depth_m: float = field(default=0.0, metadata={"allowed": "[0, depth_m)"})
+    """Depth of the water table below the ground surface, m, in [0, depth_m): the soil above
+    it is dry and below it saturated, the pore pressure hydrostatic from it (docs/model.md,
+    "The ground at rest")."""
 
     def __post_init__(self) -> None:
         self._check_plan_size("site")
         require_positive("depth_m", self.depth_m, "m")
         check_bound("site.depth_m", self.depth_m)
-        require_non_negative("water_table_depth_m", self.water_table_depth_m, "m")
-        if self.water_table_depth_m > self.depth_m:
-            raise ScenarioError("water_table_depth_m", self.water_table_depth_m,
-                                f"must be <= depth_m = {self.depth_m}", "m")
-        if self.water_table_depth_m != 0.0:
-            raise ScenarioError("water_table_depth_m", self.water_table_depth_m,
-                                "only 0 (the water table at the ground surface) is modelled; a "
-                                "water table lowered after the start is a groundwater stage "
-                                "(docs/model.md, 'Ground that moves')", "m")
-
-
-@dataclass(frozen=True)
-class Installation:
-    """Excess pore pressure the piles' installation leaves in the soil around each shaft.
-
-    Cylindrical cavity expansion (docs/model.md, "Installation pore pressures"): at a distance
-    ``r`` from a pile's axis, ``u = u_s ln(R/r) / ln(R/r0)`` for ``r0 <= r <= R`` (``r0`` the
-    pile radius, ``R = radius_ratio r0``), 0 beyond and below the toe; the fields of the piles
-    add up. At the shaft ``u_s = excess_pore_pressure_ratio x sigma'_v``: the undrained
-    strength of a normally consolidated clay, and with it the cavity pressure, grows with the
-    vertical effective stress.
-    """
-
-    excess_pore_pressure_ratio: float
-    """``u_s / sigma'_v`` at the shaft, in (0, 1)."""
-    radius_ratio: float
-    """``R / r0``: the radius of the disturbed zone over the pile radius (> 1)."""
-
-    def __post_init__(self) -> None:
-        require_positive("excess_pore_pressure_ratio", self.excess_pore_pressure_ratio, "-")
-        check_bound("piles.installation.excess_pore_pressure_ratio",
-                    self.excess_pore_pressure_ratio)
-        require_finite("radius_ratio", self.radius_ratio, "-")
-        check_bound("piles.installation.radius_ratio", self.radius_ratio)
-
-
-#: Words that mark a key of a layout entry as a rake (batter) of the pile: rejected with their
-#: own message, since every pile of the model is vertical.
-RAKE_WORDS = ("rake", "batter", "inclin", "tilt", "angle", "azimuth")
-
-
-def _check_pile_size(table: str, diameter: float | None, length: float | None) -> None:
-    """A pile's ``diameter_m`` and ``length_in_soil_m``, where given: positive, in bounds."""
-    for key, value in (("diameter_m", diameter), ("length_in_soil_m", length)):
-        if value is not None:
-            require_positive(key, value, "m")
-            check_bound(f"{table}.{key}", value)
-
-
-@dataclass(frozen=True)
-class LayoutPile:
-    """One entry of ``piles.layout``: a vertical pile at ``(x_m, y_m)`` (m, plan coordinates).
-
-    ``diameter_m`` and ``length_in_soil_m`` (m) are the pile's own; an omitted one is the
-    ``[piles]``-level value of the same name. Raked (battered) piles are not modelled: a key
-    giving a rake is rejected (:meth:`unknown_key_message`).
-    """
-
-    x_m: float
-    y_m: float
-    diameter_m: float | None = None
-    length_in_soil_m: float | None = None
-
-    def __post_init__(self) -> None:
-        require_finite("x_m", self.x_m, "m")
-        require_finite("y_m", self.y_m, "m")
-        _check_pile_size("piles.layout", self.diameter_m, self.length_in_soil_m)
-
-    @classmethod
-    def unknown_key_message(cls, key: str) -> str:
-        """What the loader says of an unknown key ``key`` in a layout entry.
-
-        A key naming a rake or batter (:data:`RAKE_WORDS`, e.g. ``rake_deg``, ``batter``,
-        ``inclination_deg``) says that raked piles are not supported; any other says so too,
-        after the allowed keys, so that nobody reads a silently dropped key as a raked pile.
-        """
-        allowed = "allowed keys: " + ", ".join(f.name for f in dataclasses.fields(cls))
-        if any(w in key.lower() for w in RAKE_WORDS):
-            return (f"raked piles are not supported: every pile is vertical (no rake or batter"
-                    f" can be given); {allowed}")
-        return f"unknown key; {allowed} (vertical piles only: raked piles are not supported)"
-
-
-@dataclass(frozen=True)
-class Piles:
-    """The piles: a regular grid centred on the cap, explicit positions, or an explicit layout.
-
-    Exactly one of: ``grid`` [nx, ny] with ``spacing_m`` [sx, sy]; ``positions_m`` [[x, y],
-    ...] (m, plan coordinates); ``layout``, a list of :class:`LayoutPile` tables, each pile
-    with its own position and, optionally, its own diameter and length in soil. With ``grid``
-    or ``positions_m`` every pile has ``diameter_m`` and ``length_in_soil_m``; with ``layout``
-    these are the defaults of the entries that omit them (and may be left out when every entry
-    gives its own). The embedment in the cap is one for all piles.
-
-    Piles are numbered from 1 in the order :attr:`xy` lists them; :attr:`diameters` and
-    :attr:`lengths` are aligned with it. Two piles must not overlap: the distance between their
-    centres is at least the mean of their two diameters (their cross-sections may touch).
-    """
-
-    diameter_m: float | None = None
-    length_in_soil_m: float | None = None
-    embedment_m: float = 0.0
-    grid: tuple[int, int] | None = None
-    spacing_m: tuple[float, float] | None = None
-    positions_m: tuple[tuple[float, float], ...] | None = None
-    layout: tuple[LayoutPile, ...] | None = None
-    installation: Installation | None = None
-    """Installation pore pressures present at the start (None: wished in place, no excess)."""
-
-    def __post_init__(self) -> None:
-        _check_pile_size("piles", self.diameter_m, self.length_in_soil_m)
-        require_non_negative("embedment_m", self.embedment_m, "m")
-        self._check_layout()
-        self._check_sizes()
-        self._check_overlap()
-
-    def _layout_key(self) -> str:
-        """The key that places the piles: ``layout``, ``positions_m`` or ``grid``."""
-        if self.layout is not None:
-            return "layout"
-        return "positions_m" if self.positions_m is not None else "grid"
-
-    def _check_layout(self) -> None:
-        """Exactly one of grid, positions_m and layout; finite positions; at most MAX_PILES."""
-        given = [k for k, v in (("grid", self.grid), ("positions_m", self.positions_m),
-                                ("layout", self.layout)) if v is not None]
-        if len(given) > 1:
-            later = given[-1]
-            n = len(getattr(self, later))
-            raise ScenarioError(later, f"{n} entries", "give exactly one of grid (with"
-                                " spacing_m), positions_m or layout; here also "
-                                + " and ".join(given[:-1]))
-        if self.spacing_m is not None and self.grid is None and given:
-            raise ScenarioError("spacing_m", list(self.spacing_m),
-                                f"goes with grid only: leave it out with {given[0]}", "m")
-        if self.layout is not None:
-            if len(self.layout) == 0:
-                raise ScenarioError("layout", [], "must list at least one pile")
-        elif self.positions_m is not None:
-            if len(self.positions_m) == 0:
-                raise ScenarioError("positions_m", [], "must list at least one pile", "m")
-            for i, xy in enumerate(self.positions_m):
-                for j, v in enumerate(xy):
-                    require_finite(f"positions_m[{i}][{j}]", v, "m")
-        else:
-            if self.grid is None:
-                raise ScenarioError("grid", None, "missing: give grid = [nx, ny] with spacing_m,"
-                                    " positions_m or layout")
-            for i, v in enumerate(self.grid):
-                if v < 1:
-                    raise ScenarioError(f"grid[{i}]", v, "must be an integer >= 1")
-            if self.spacing_m is None:
-                if any(v > 1 for v in self.grid):
-                    raise ScenarioError("spacing_m", None, "missing: required when grid > 1x1",
-                                        "m")
-            else:
-                for i, v in enumerate(self.spacing_m):
-                    require_positive(f"spacing_m[{i}]", v, "m")
-        n = self.count
-        if n > MAX_PILES:
-            raise ScenarioError(self._layout_key(), n,
-                                f"at most {MAX_PILES} piles (the mesh names pile_1 .. "
-                                f"pile_{MAX_PILES})", "-")
-
-    def _check_sizes(self) -> None:
-        """Every pile has a diameter and a length: its own (layout) or the ``[piles]`` one."""
-        for key in ("diameter_m", "length_in_soil_m"):
-            if getattr(self, key) is not None:
-                continue
-            if self.layout is None:
-                raise ScenarioError(key, None, f"missing key; expected a number (with"
-                                    f" {self._layout_key()} every pile has this {key}; a layout"
-                                    " may give each pile its own)", "m")
-            for i, entry in enumerate(self.layout):
-                if getattr(entry, key) is None:
-                    raise ScenarioError(f"layout[{i}].{key}", None,
-                                        f"missing: give {key} in this entry, or piles.{key} as"
-                                        " the value of every entry that omits it", "m")
-
-    def _check_overlap(self) -> None:
-        """No two pile cross-sections overlap: centre distance >= the mean of the diameters."""
-        xy, d = self.xy, self.diameters
-        for i in range(len(xy)):
-            for j in range(i):
-                dist = math.dist(xy[i], xy[j])
-                least = 0.5 * (d[i] + d[j])
-                if dist < least:
-                    key = {"layout": f"layout[{i}]", "positions_m": "positions_m",
-                           "grid": "spacing_m"}[self._layout_key()]
-                    raise ScenarioError(
-                        key, [list(xy[j]), list(xy[i])],
-                        f"piles {j + 1} and {i + 1} overlap: centre distance {dist:g} m must be"
-                        f" >= the mean of their diameters ({d[j]:g} + {d[i]:g}) / 2 ="
-                        f" {least:g} m", "m")
-
-    @property
-    def xy(self) -> tuple[tuple[float, float], ...]:
-        """Plan positions (m) of every pile, numbered from 1.
-
-        In the order of ``layout`` or ``positions_m``; a grid row by row (x fastest).
-        """
-        if self.layout is not None:
-            return tuple((float(e.x_m), float(e.y_m)) for e in self.layout)
-        if self.positions_m is not None:
-            return tuple((float(x), float(y)) for x, y in self.positions_m)
-        nx, ny = self.grid  # type: ignore[misc]
-        sx, sy = self.spacing_m if self.spacing_m is not None else (0.0, 0.0)
-        return tuple(((i - (nx - 1) / 2) * sx, (j - (ny - 1) / 2) * sy)
-                     for j in range(ny) for i in range(nx))
-
-    def _per_pile(self, key: str) -> tuple[float, ...]:
-        default = getattr(self, key)
-        if self.layout is None:
-            return (float(default),) * self.count
-        return tuple(float(default if getattr(e, key) is None else getattr(e, key))
-                     for e in self.layout)
-
-    @property
-    def diameters(self) -> tuple[float, ...]:
-        """Diameter (m) of every pile, aligned with :attr:`xy` (pile ``i`` at index ``i - 1``)."""
-        return self._per_pile("diameter_m")
-
-    @property
-    def lengths(self) -> tuple[float, ...]:
-        """Length in soil (m) of every pile, aligned with :attr:`xy`."""
-        return self._per_pile("length_in_soil_m")
-
-    def key_of(self, i: int, key: str) -> str:
-        """The scenario key that sets ``key`` of pile ``i`` (1-based), for messages.
-
-        ``key`` is ``diameter_m`` or ``length_in_soil_m``; the answer is
-        ``piles.layout[i - 1].<key>`` when that entry gives it, else ``piles.<key>``.
-        """
-        if self.layout is not None and getattr(self.layout[i - 1], key) is not None:
-            return f"piles.layout[{i - 1}].{key}"
-        return f"piles.{key}"
-
-    @property
-    def count(self) -> int:
-        """Number of piles."""
-        if self.layout is not None:
-            return len(self.layout)
-        if self.positions_m is not None:
-            return len(self.positions_m)
-        return math.prod(self.grid)  # type: ignore[arg-type]
+        require_in_range("water_table_depth_m", self.water_table_depth_m, 0.0, self.depth_m,
+                         "m", hi_open=True, why="in the soil block, above site.depth_m")
 
 
 @dataclass(frozen=True)
@@ -469,7 +360,11 @@ class Cap(_PlanRectangle):
     """
 
     thickness_m: float
-    in_contact_with_soil: bool | None = None
+    """Thickness of the cap above the ground surface, m."""
+    in_contact_with_soil: bool | None = field(default=None, metadata={
+        "allowed": "true with interface.mode = \"tied\", else false"})
+    """Whether the cap's bottom is bonded to the ground; not set: what the interface mode
+    implies (bonded with tied piles, free of the soil with an interface law)."""
 
     def __post_init__(self) -> None:
         self._check_plan_size("cap")
@@ -482,8 +377,11 @@ class Structure(_ElasticMPa):
     """Linear elastic material of piles and cap."""
 
     E_MPa: float
+    """Young's modulus of the piles and the cap, MPa."""
     nu: float
+    """Poisson's ratio of the piles and the cap."""
     density_kg_per_m3: float
+    """Density of the piles and the cap, kg/m^3 (their self-weight)."""
 
     def __post_init__(self) -> None:
         self._check_elastic("structure")

@@ -1,8 +1,9 @@
 """Boundary conditions of the coupled problem and the force-controlled rigid plate.
 
 Prescribed displacements (ramped with the load factor when asked), drained boundaries (excess
-pore pressure prescribed; released in undrained steps unless ``in_undrained_steps``) and at most
-one rigid plate whose resultant is held at a given force by bordering the Newton system.
+pore pressure prescribed; released in undrained steps unless ``in_undrained_steps``), the dry
+soil above a water table (its pressure held at 0 in every step) and at most one rigid plate
+whose resultant is held at a given force by bordering the Newton system.
 """
 
 from __future__ import annotations
@@ -15,6 +16,7 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from pilegroup.errors import SolverInputError
+from pilegroup.solver.geostatic import Z_TOL
 from pilegroup.solver.inputs import DisplacementBC, PressureBC, RigidPlate
 from pilegroup.solver.interface import NodalInterface
 from pilegroup.solver.layout import BlockLayout
@@ -30,7 +32,7 @@ class Constraints:
 
     def __init__(self, layout: BlockLayout, displacement_bcs: Sequence[DisplacementBC],
                  pressure_bcs: Sequence[PressureBC], plates: Sequence[RigidPlate],
-                 interface: NodalInterface | None) -> None:
+                 interface: NodalInterface | None, water_table: float | None = None) -> None:
         if len(plates) > 1:
             raise SolverInputError(f"plates: {len(plates)} given; allowed: at most 1")
         self.bcs: list[fem.DirichletBC] = []
@@ -48,19 +50,32 @@ class Constraints:
                 self.add(layout.facet_dofs(b, bc.facet, bc.component), b.V.sub(bc.component),
                           c, b.u)
         self._p_consts: list[tuple[PressureBC, fem.Constant]] = []
+        dry = self._hold_dry(layout, water_table)
         for pbc in pressure_bcs:
             value = default_scalar_type(pbc.value)
             if pbc.action is not None:  # scaled by a ground action's amplitude (set_ground)
                 value = fem.Constant(mesh, default_scalar_type(0.0))
                 self._p_consts.append((pbc, value))
-            dofs = layout.pressure_dofs(pbc.facet) if pbc.cells is None else \
-                layout.pressure_dofs_in_cells(pbc.cells)
+            dofs = np.setdiff1d(_pressure_dofs(layout, pbc), dry).astype(np.int32)
             bc, bc0 = self.add(dofs, layout.Q, value, layout.p)
-            if (pbc.facet is not None or pbc.cells is not None) and not pbc.in_undrained_steps:
+            if (pbc.facet, pbc.cells, pbc.level) != (None,) * 3 and not pbc.in_undrained_steps:
                 self._drain.update({id(bc), id(bc0)})
         self.plate = RigidPlateControl(self, layout, plates[0], interface) if plates else None
         self._held: set[int] = set()
         self.installed = True
+
+    def _hold_dry(self, layout: BlockLayout, water_table: float | None) -> np.ndarray:
+        """Hold the pressure dofs above the water table at 0 in every step; those dofs.
+
+        The soil there is dry: no term of the mass balance acts on them (``solver/forms.py``),
+        and no other condition may set them.
+        """
+        if water_table is None:
+            return np.zeros(0, dtype=np.int32)
+        z = layout.Q.tabulate_dof_coordinates()[:, 2]
+        dofs = np.flatnonzero(z > water_table + Z_TOL).astype(np.int32)
+        self.add(dofs, layout.Q, default_scalar_type(0.0), layout.p)
+        return dofs
 
     def hold(self, layout: BlockLayout, role: str) -> None:
         """Hold every displacement of body ``role`` at zero until :attr:`installed` is set.
@@ -118,6 +133,16 @@ class Constraints:
             if not (undrained and id(bc) in self._drain) and not (
                     self.installed and id(bc) in self._held):
                 bc.set(f.x.array)
+
+
+def _pressure_dofs(layout: BlockLayout, pbc: PressureBC) -> np.ndarray:
+    """The pressure dofs ``pbc`` prescribes: its facet group, cell group or level (all: none)."""
+    if pbc.cells is not None:
+        return layout.pressure_dofs_in_cells(pbc.cells)
+    if pbc.level is None:
+        return layout.pressure_dofs(pbc.facet)
+    z = layout.Q.tabulate_dof_coordinates()[:, 2]
+    return np.flatnonzero(np.abs(z - pbc.level) <= Z_TOL).astype(np.int32)
 
 
 class RigidPlateControl:

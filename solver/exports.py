@@ -330,6 +330,8 @@ class SolverSummary(TypedDict, total=False):
     peak_rss_mb_per_rank: list[float]
     steps: int
     rejected_steps: int
+    alternate_tolerance_steps: int
+    """Steps accepted by Newton's alternate tolerance (docs/solver.md, "Newton")."""
     newton_iterations: int
     ksp_iterations: int
     ksp_iterations_max_per_solve: int
@@ -369,6 +371,7 @@ def run_summary(problem: BiotProblem, log: RunLog, extra: Mapping[str, Any] | No
         "peak_rss_mb_per_rank": comm.allgather(peak_rss_mb()),
         "steps": len(log.steps),
         "rejected_steps": log.rejected,
+        "alternate_tolerance_steps": log.alternate,
         "newton_iterations": log.newton_total,
         "ksp_iterations": sum(s.ksp_its for s in log.steps),
         "ksp_iterations_max_per_solve": max((s.ksp_max for s in log.steps), default=0),

@@ -5,10 +5,11 @@ Residual ``F[i]`` and Jacobian ``J[i][j]`` blocks follow the block order of
 units kN, m, day; tension positive; ``p`` excess pore pressure, compression positive):
 
 * momentum: ``int sigma' : eps(v) - p div v + b' . v``, ``b' = (gamma_sat - GAMMA_W) e_z`` the
-  buoyant weight (with ``self_weight``); the stress and its consistent tangent come from the
-  quadrature-point state;
+  buoyant weight (with ``self_weight``; the total weight and no ``p`` term in the dry soil above
+  a water table); the stress and its consistent tangent come from the quadrature-point state;
 * mass balance, backward Euler (multiplied by dt):
-  ``S (p - p_n) + div(u - u_n) - dt div((k/GAMMA_W) grad p) = 0``, ``S = n / K_w``;
+  ``S (p - p_n) + div(u - u_n) - dt div((k/GAMMA_W) grad p) = 0``, ``S = n / K_w``, in the
+  saturated soil (the dry soil's pressure unknowns are held, ``solver/constraints.py``);
 * pressure stabilisation of Q1-Q1: ``tau int (J J^T / 12) grad(p - p_n) . grad q``, a
   pressure Laplacian in each cell's own metric (``J`` the Jacobian of the map from the unit
   cube), ``tau = 3 / (lambda + 2 mu)`` per soil material (:func:`projection_tau`);
@@ -25,11 +26,13 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
+import numpy as np
 import ufl
 from dolfinx import default_scalar_type, fem
 from dolfinx import mesh as dmesh
 
-from pilegroup.solver.geostatic import SoilColumn
+from pilegroup.errors import SolverInputError
+from pilegroup.solver.geostatic import Z_TOL, SoilColumn
 from pilegroup.solver.inputs import (
     GAMMA_W,
     Discretisation,
@@ -106,14 +109,39 @@ def projection_tau(K: float, G: float) -> float:
     return 3.0 / (K + 4.0 * G / 3.0)
 
 
+#: Smallest mean effective stress (kPa) at which a stress-dependent law's moduli are taken.
+P_REF_MIN = 1.0
+
+
+def representative_moduli(mat: SoilMaterial, column: SoilColumn, name: str
+                          ) -> tuple[float, float]:
+    """(bulk K, shear G) of soil group ``name``'s elastic part for ``tau`` and ``beta``, kPa.
+
+    A law whose elastic moduli follow the stress (Modified Cam Clay, Soft Soil Creep: its
+    ``elastic_moduli(p)``) gives them at the mean effective stress at rest at its layer's
+    mid-depth, ``p = (1 + 2 K0) sigma'_v / 3`` (at least :data:`P_REF_MIN`), one value for the
+    whole layer (docs/model.md, "Soil models per layer"); every other law its constant moduli.
+    """
+    moduli = getattr(mat.law, "elastic_moduli", None)
+    if moduli is None:
+        return mat.elastic_moduli()
+    lay = column.by_name[name]
+    z = np.array([0.5 * (lay.z_min + min(lay.z_max, column.z_top))])
+    p = -(1.0 + 2.0 * lay.k0) / 3.0 * float(column.sigma_v(z)[0])
+    return moduli(max(p, P_REF_MIN))
+
+
 class Coefficients:
     """Cell-wise (DG0, parent mesh) material coefficients of the soil terms.
 
     ``S`` storage (1/kPa), ``mob`` mobility k/GAMMA_W (m^2/(kPa day); the vertical one when a
-    layer is anisotropic, ``mob_h`` then the horizontal one, else ``None``), ``gam`` buoyant unit
-    weight (kN/m^3; solids take that of the layer they replace), ``tau`` stabilisation
+    layer is anisotropic, ``mob_h`` then the horizontal one, else ``None``), ``gam`` the unit
+    weight the skeleton carries (kN/m^3: buoyant, total above the water table; solids take that
+    of the layer they replace), ``sat`` 1 in saturated cells and 0 above the water table
+    (``None`` when no soil is above it), ``tau`` stabilisation
     ``stab_factor * projection_tau(K, G)`` (1/kPa), ``beta`` fixed-stress ``1/K`` (1/kPa); the
-    moduli are those of each material's elastic part (the elastic moduli of a plastic soil).
+    moduli are those of each material's elastic part (the elastic moduli of a plastic soil; a
+    stress-dependent one's at its layer's mid-depth, :func:`representative_moduli`).
     """
 
     def __init__(self, layout: BlockLayout, disc: Discretisation, column: SoilColumn) -> None:
@@ -124,21 +152,29 @@ class Coefficients:
         # horizontal mobility, only when a layer is anisotropic (else ``mob`` acts everywhere)
         self.mob_h = fem.Function(D0) if any(m.k_h_m_per_day is not None for m in soils) \
             else None
+        # 1 in saturated cells, 0 above the water table; only when there is soil above it
+        self.sat = fem.Function(D0) if column.has_dry else None
         for name, mat in layout.materials.items():
             cells = md.cell_tags.find(md.cell_tag(name))
+            zc = dmesh.compute_midpoints(mesh, mesh.topology.dim, cells)[:, 2]
             if not isinstance(mat, SoilMaterial):
-                zc = dmesh.compute_midpoints(mesh, mesh.topology.dim, cells)[:, 2]
-                self.gam.x.array[cells] = column.buoyant_weight(zc)
+                self.gam.x.array[cells] = column.skeleton_weight(zc)
                 continue
-            K, G = mat.elastic_moduli()
-            self.S.x.array[cells] = mat.storage
-            self.mob.x.array[cells] = mat.mobility
+            K, G = representative_moduli(mat, column, name)
+            wet = column.wet(zc)
+            self.S.x.array[cells] = mat.storage * wet
+            self.mob.x.array[cells] = mat.mobility * wet
             if self.mob_h is not None:
-                self.mob_h.x.array[cells] = mat.mobility_h
-            self.gam.x.array[cells] = mat.gamma_sat - GAMMA_W
-            self.tau.x.array[cells] = disc.stab_factor * projection_tau(K, G)
-            self.beta.x.array[cells] = 1.0 / K
+                self.mob_h.x.array[cells] = mat.mobility_h * wet
+            dry = mat.gamma_sat if mat.gamma_unsat is None else mat.gamma_unsat
+            self.gam.x.array[cells] = np.where(wet, mat.gamma_sat - GAMMA_W, dry)
+            self.tau.x.array[cells] = disc.stab_factor * projection_tau(K, G) * wet
+            self.beta.x.array[cells] = 1.0 / K * wet
+            if self.sat is not None:
+                self.sat.x.array[cells] = wet
         self.dt = fem.Constant(mesh, default_scalar_type(0.0))
+        if column.has_dry:
+            _check_cells_off_water_table(layout, column.z_w)
 
 
 class FormBuilder:
@@ -199,9 +235,20 @@ class FormBuilder:
                 f.add_F(i, self.coef.gam * v[2] * self.dx_body(b))
             f.add_J(i, i, self.tangent(b))
         v0, du0 = self.tests[0], self.trials[0]
-        f.add_F(0, -lay.p * ufl.div(v0) * self.dx)
-        f.add_J(0, 1, -self.dp * ufl.div(v0) * self.dx)
-        f.add_J(1, 0, ufl.div(du0) * self.q * self.dx)
+        f.add_F(0, -self.wet(lay.p) * ufl.div(v0) * self.dx)
+        f.add_J(0, 1, -self.wet(self.dp) * ufl.div(v0) * self.dx)
+        f.add_J(1, 0, self.wet(ufl.div(du0)) * self.q * self.dx)
+
+    def wet(self, expr: ufl.core.expr.Expr, side: str | None = None) -> ufl.core.expr.Expr:
+        """``expr`` in saturated soil, 0 above the water table (``side``: a facet's side).
+
+        The soil above the water table is dry: its skeleton carries no pore pressure and adds
+        no volume change to the water's mass balance.
+        """
+        sat = self.coef.sat
+        if sat is None:
+            return expr
+        return sat * expr if side is None else sat(side) * expr
 
     def surface_loads(self, loads: Sequence[SurfaceLoad | FaceAction]
                       ) -> list[tuple[SurfaceLoad | FaceAction, fem.Constant]]:
@@ -231,7 +278,7 @@ class FormBuilder:
         lay, c, q, dp = self.layout, self.coef, self.q, self.dp
         p, p_n, u, u_n = lay.p, lay.p_n, lay.fields[0], lay.fields_n[0]
         dx = self.dx
-        self.forms.add_F(1, (c.S * (p - p_n) + ufl.div(u - u_n)) * q * dx
+        self.forms.add_F(1, (c.S * (p - p_n) + self.wet(ufl.div(u - u_n))) * q * dx
                          + c.dt * self._darcy(p, q) * dx)
         self.forms.add_J(1, 1, c.S * dp * q * dx + c.dt * self._darcy(dp, q) * dx,
                          part="each")
@@ -277,7 +324,7 @@ class FormBuilder:
         r_t, r_s = itf.residual_forms(v_t, v_s)
         n = ufl.FacetNormal(lay.mesh)("+")
         dS = itf.surface_measure()
-        p = lay.p("-")
+        p = self.wet(lay.p("-"), "-")
         f.add_F(i_t, r_t + p * ufl.inner(n, v_t("+")) * dS)
         f.add_F(i_s, r_s - p * ufl.inner(n, v_s("-")) * dS)
         Ji = itf.jacobian_forms(du_t, du_s, v_t, v_s)
@@ -285,8 +332,9 @@ class FormBuilder:
         f.add_J(i_t, i_s, Ji[0][1], part="itf")
         f.add_J(i_s, i_t, Ji[1][0], part="itf")
         f.add_J(i_s, i_s, Ji[1][1], part="itf")
-        f.add_J(i_s, 1, -self.dp("-") * ufl.inner(n, v_s("-")) * dS)
-        f.add_J(i_t, 1, self.dp("-") * ufl.inner(n, v_t("+")) * dS)
+        dp = self.wet(self.dp("-"), "-")
+        f.add_J(i_s, 1, -dp * ufl.inner(n, v_s("-")) * dS)
+        f.add_J(i_t, 1, dp * ufl.inner(n, v_t("+")) * dS)
 
     def fixed_stress(self) -> list[list[Form]]:
         """Preconditioning blocks: ``(1/K) M`` on p, zero-valued mass blocks on u.
@@ -303,17 +351,38 @@ class FormBuilder:
         return P.J
 
 
-def interface_force_form(layout: BlockLayout, itf: NodalInterface) -> ufl.Form:
+def _check_cells_off_water_table(layout: BlockLayout, z_w: float) -> None:
+    """No cell reaches across the water table: the mesh has a surface there (collective).
+
+    The unit weight, the pressure terms and the drained boundary change at the water table, so
+    it must lie on cell faces (``GeometrySpec.levels``).
+    """
+    mesh = layout.mesh
+    x = mesh.geometry.x[:, 2]
+    imap = mesh.topology.index_map(mesh.topology.dim)
+    z = x[mesh.geometry.dofmaps[0][:imap.size_local]]
+    cut = mesh.comm.allreduce(int(np.sum((z.min(axis=1) < z_w - Z_TOL)
+                                         & (z.max(axis=1) > z_w + Z_TOL))))
+    if cut > 0:
+        raise SolverInputError(f"water table z = {z_w:g} m: {cut} cells reach across it;"
+                               " allowed: a mesh with a horizontal surface at the water table"
+                               " (GeometrySpec.levels)")
+
+
+def interface_force_form(layout: BlockLayout, itf: NodalInterface, coef: Coefficients
+                         ) -> ufl.Form:
     """``int (t' - p n) . v`` over the pile surfaces, ``v`` a structure test function.
 
     The force (kN per structure dof) the soil exerts on the structure through the interface:
-    the interface's part of the structure's external force (:meth:`FormBuilder.interface`).
+    the interface's part of the structure's external force (:meth:`FormBuilder.interface`;
+    ``coef.sat``: no pore pressure above the water table).
     """
     soil, struct = layout.body("soil"), layout.body("structure")
     v_t, v_s = ufl.TestFunction(struct.V), ufl.TestFunction(soil.V)
     r_t, _ = itf.residual_forms(v_t, v_s)
     n = ufl.FacetNormal(layout.mesh)("+")
-    return -(r_t + layout.p("-") * ufl.inner(n, v_t("+")) * itf.surface_measure())
+    p = layout.p("-") if coef.sat is None else coef.sat("-") * layout.p("-")
+    return -(r_t + p * ufl.inner(n, v_t("+")) * itf.surface_measure())
 
 
 def _unit_traction(mesh: dmesh.Mesh, fa: FaceAction) -> ufl.core.expr.Expr:

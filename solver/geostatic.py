@@ -1,10 +1,13 @@
 """The geostatic initial state: K0 effective stress of horizontal soil layers.
 
-``sigma'_v(z) = -int_z^{z_top} (gamma_sat - GAMMA_W) dz`` over the soil layers (their elevation
-ranges, all-reduced over the ranks), ``sigma'_h = K0 sigma'_v``; ``z_top`` is the highest soil
-elevation (water table at the ground surface). Solids ("wished in place") take the stress and
-the buoyant weight of the soil layer they replace (zero above ground). Units kPa, m; tension
-positive, so the in-situ stresses are negative.
+``sigma'_v(z) = -int_z^{z_top} w dz`` over the soil layers (their elevation ranges, all-reduced
+over the ranks), ``sigma'_h = K0 sigma'_v``; ``z_top`` is the highest soil elevation. The
+skeleton's weight ``w`` is the buoyant ``gamma_sat - GAMMA_W`` below the water table
+(elevation ``z_w``, ``z_top`` unless given) and the total ``gamma_unsat`` above it, where the
+soil is dry: the hydrostatic pore pressure ``GAMMA_W (z_w - z)`` below it and none above,
+taken off the total stress, leave that effective stress (docs/model.md, "The ground at rest").
+Solids ("wished in place") take the stress and the weight of the soil layer they replace (zero
+above ground). Units kPa, m; tension positive, so the in-situ stresses are negative.
 
 A layer still consolidating starts with an excess pore pressure ``u0(z) >= 0``
 (``SoilMaterial.excess_ratio`` of ``-sigma'_v`` or ``excess_kPa``): it carries part of the
@@ -24,6 +27,10 @@ effective stress of the soil is less compressive by ``u_i`` in every direction, 
 their total stress and the interface law starts at the effective traction less ``u_i``. The
 soil's share is evaluated at the quadrature points as the pressure space's interpolant of
 ``u_i`` (passed to :meth:`SoilColumn.stress`), so this state too is in discrete equilibrium.
+Both excess pore pressures are zero at and above the water table (dry soil, its drained
+boundary). Layers held at a head of their own (under-drained or artesian) make the water seep
+steadily between them and the water table: that pore pressure above the hydrostatic one
+(``seepage``, either sign) is part of ``u0``, so the effective stress follows it.
 """
 
 from __future__ import annotations
@@ -39,10 +46,16 @@ from pilegroup.geometry.meshdata import MeshData
 from pilegroup.solver.inputs import GAMMA_W, ElasticSolid, InstallationExcess, SoilMaterial
 from pilegroup.solver.qpstate import QuadratureState
 
+#: Elevations within this distance (m) of the water table are on it.
+Z_TOL = 1e-6
+
 
 @dataclass(frozen=True)
 class GeostaticLayer:
-    """Elevation range (m), buoyant unit weight (kN/m^3) and K0 of one soil group."""
+    """One soil group: elevations (m), unit weights (kN/m^3), K0, initial excess pressure.
+
+    ``gamma_b`` is the buoyant unit weight, ``gamma_dry`` the total one above the water table.
+    """
 
     z_min: float
     z_max: float
@@ -50,6 +63,7 @@ class GeostaticLayer:
     k0: float
     excess_ratio: float = 0.0
     excess_kPa: float = 0.0
+    gamma_dry: float = 0.0
 
 
 class SoilColumn:
@@ -59,11 +73,19 @@ class SoilColumn:
         md: mesh and tags.
         materials: cell-group name -> material; the :class:`SoilMaterial` groups are the layers.
         installation: the piles' installation pore pressures (None: none).
+        water_table: elevation (m) of the water table; None: the top of the soil.
+        seepage: ``(elevation m, kPa)`` points of a pore pressure at rest above the hydrostatic
+            one, linear between them (steady seepage towards layers held at a head of their
+            own): part of the initial excess pore pressure ``u0``.
     """
 
     def __init__(self, md: MeshData, materials: Mapping[str, SoilMaterial | ElasticSolid],
-                 installation: InstallationExcess | None = None) -> None:
+                 installation: InstallationExcess | None = None,
+                 water_table: float | None = None,
+                 seepage: Sequence[tuple[float, float]] = ()) -> None:
         self.installation = installation
+        pts = sorted(seepage)
+        self.seepage = (np.array([z for z, _ in pts]), np.array([u for _, u in pts]))
         comm = md.mesh.comm
         gx = md.mesh.geometry.x
         cdm = md.mesh.geometry.dofmaps[0]
@@ -76,29 +98,48 @@ class SoilColumn:
             z = gx[cdm[cells].reshape(-1), 2] if cells.size else None
             zmin = comm.allreduce(float(z.min()) if z is not None else np.inf, op=MPI.MIN)
             zmax = comm.allreduce(float(z.max()) if z is not None else -np.inf, op=MPI.MAX)
+            dry = mat.gamma_sat if mat.gamma_unsat is None else mat.gamma_unsat
             layer = GeostaticLayer(zmin, zmax, mat.gamma_sat - GAMMA_W, mat.k0,
-                                   mat.excess_ratio, mat.excess_kPa)
+                                   mat.excess_ratio, mat.excess_kPa, dry)
             self.layers.append(layer)
             self.by_name[name] = layer
         self.z_top = max(lay.z_max for lay in self.layers) if self.layers else 0.0
+        self.z_w = self.z_top if water_table is None else min(float(water_table), self.z_top)
         self._levels: tuple[np.ndarray, np.ndarray] | None = None
 
     @property
+    def has_dry(self) -> bool:
+        """Whether the water table lies below the top of the soil (dry soil above it)."""
+        return self.z_w < self.z_top - Z_TOL
+
+    def wet(self, z: np.ndarray) -> np.ndarray:
+        """Whether each elevation ``z`` (m) is below the water table.
+
+        On it: not, unless the water table is the top of the soil (then every elevation is).
+        """
+        z = np.asarray(z)
+        return z < self.z_w - Z_TOL if self.has_dry else np.ones(z.shape, dtype=bool)
+
+    @property
     def has_excess(self) -> bool:
-        """Whether any layer starts with an excess pore pressure."""
-        return any(lay.excess_ratio > 0.0 or lay.excess_kPa > 0.0 for lay in self.layers)
+        """Whether any layer starts with an excess pore pressure (or seepage)."""
+        return bool(np.any(self.seepage[1] != 0.0)) or any(
+            lay.excess_ratio > 0.0 or lay.excess_kPa > 0.0 for lay in self.layers)
 
     def excess_at_nodes(self, z: np.ndarray) -> np.ndarray:
-        """Initial excess pore pressure (kPa, >= 0) of the layers at elevations ``z`` (m).
+        """Initial excess pore pressure (kPa) at elevations ``z`` (m).
 
-        At an elevation shared by two layers the lower layer's rule applies.
+        The layers' own (>= 0; at an elevation shared by two layers the lower layer's rule
+        applies) plus the seepage at rest (either sign); 0 at and above the water table.
         """
         out = np.zeros_like(z)
         sv = -self.sigma_v(z)
         for lay in self.layers:
             inside = (z >= lay.z_min) & (z <= lay.z_max)
             out[inside] = lay.excess_ratio * sv[inside] + lay.excess_kPa
-        return out
+        if self.seepage[0].size:
+            out += np.interp(z, *self.seepage)
+        return np.where(self.wet(z), out, 0.0)
 
     def set_excess_levels(self, z_nodes: np.ndarray, comm: MPI.Comm) -> None:
         """Make ``u0`` the interpolant through the pressure nodes' elevations (all ranks)."""
@@ -118,7 +159,8 @@ class SoilColumn:
         x = np.asarray(x, dtype=float).reshape(-1, 3)
         if self.installation is None:
             return np.zeros(x.shape[0])
-        return self.installation.ratio * -self.sigma_v(x[:, 2]) * self.installation.shape(x)
+        u = self.installation.ratio * -self.sigma_v(x[:, 2]) * self.installation.shape(x)
+        return np.where(self.wet(x[:, 2]), u, 0.0)
 
     def check_installation(self, x: np.ndarray, comm: MPI.Comm) -> None:
         """The installation leaves the horizontal effective stress compressive at points ``x``.
@@ -150,13 +192,19 @@ class SoilColumn:
         """Vertical geostatic effective stress (kPa, negative) at elevations ``z`` (m)."""
         s = np.zeros_like(z)
         for lay in self.layers:
-            s -= lay.gamma_b * np.clip(np.minimum(lay.z_max, self.z_top)
-                                       - np.maximum(lay.z_min, z), 0.0, None)
+            top, low = min(lay.z_max, self.z_top), np.maximum(lay.z_min, z)
+            s -= lay.gamma_b * np.clip(np.minimum(top, self.z_w) - low, 0.0, None)
+            s -= lay.gamma_dry * np.clip(top - np.maximum(low, self.z_w), 0.0, None)
         return s
 
-    def buoyant_weight(self, z: np.ndarray) -> np.ndarray:
-        """Buoyant unit weight (kN/m^3) of the layer at each elevation (0 outside every layer)."""
-        return self._value(z, "gamma_b")
+    def skeleton_weight(self, z: np.ndarray) -> np.ndarray:
+        """Unit weight (kN/m^3) the skeleton carries at each elevation (0 outside every layer).
+
+        The layer's buoyant one below the water table, its total one above.
+        """
+        if not self.has_dry:
+            return self._value(z, "gamma_b")
+        return np.where(self.wet(z), self._value(z, "gamma_b"), self._value(z, "gamma_dry"))
 
     def k0(self, z: np.ndarray) -> np.ndarray:
         """K0 of the layer at each elevation (0 outside every layer)."""

@@ -26,7 +26,7 @@ GAMMA_W = GAMMA_WATER
 
 @dataclass(frozen=True)
 class SoilMaterial:
-    """Saturated soil of one cell group.
+    """Soil of one cell group, saturated below the water table.
 
     Attributes:
         law: a constitutive law of ``pilegroup.constitutive`` (Mandel notation, tension
@@ -34,7 +34,7 @@ class SoilMaterial:
         k_m_per_day: hydraulic conductivity k, m/day (Darcy: ``q = -(k/GAMMA_W) grad p``).
         porosity: n = e0/(1+e0), -; the storage is ``S = n / K_w`` (1/kPa).
         gamma_sat: saturated unit weight, kN/m^3; the buoyant weight ``gamma_sat - GAMMA_W``
-            loads the skeleton (geostatic stage).
+            loads the skeleton; above the water table ``gamma_unsat`` (None: ``gamma_sat``).
         K0: coefficient of earth pressure at rest; ``None`` gives ``1 - sin(phi)`` when the law
             has ``phi_deg``, else ``nu/(1-nu)``.
         K_w: bulk modulus of the pore water, kPa.
@@ -54,12 +54,14 @@ class SoilMaterial:
     excess_ratio: float = 0.0
     excess_kPa: float = 0.0
     k_h_m_per_day: float | None = None
+    gamma_unsat: float | None = None
 
     def __post_init__(self) -> None:
         err = SolverInputError
         require_non_negative("k_m_per_day", self.k_m_per_day, "m/day", error=err)
-        if self.k_h_m_per_day is not None:
-            require_non_negative("k_h_m_per_day", self.k_h_m_per_day, "m/day", error=err)
+        for key, unit in (("k_h_m_per_day", "m/day"), ("gamma_unsat", "kN/m^3")):
+            if getattr(self, key) is not None:
+                require_non_negative(key, getattr(self, key), unit, error=err)
         require_in_range("porosity", self.porosity, 0.0, 1.0, "-", hi_open=True, error=err)
         require_non_negative("gamma_sat", self.gamma_sat, "kN/m^3", error=err)
         require_positive("K_w", self.K_w, "kPa", error=err)
@@ -156,9 +158,8 @@ class InstallationExcess:
         err = SolverInputError
         require_in_range("ratio", self.ratio, 0.0, 1.0, "-", lo_open=True, hi_open=True,
                          error=err)
-        if not self.radius_ratio > 1.0:
-            raise SolverInputError(f"InstallationExcess.radius_ratio = {self.radius_ratio!r};"
-                                   " allowed: > 1")
+        require_in_range("radius_ratio", self.radius_ratio, 1.0, math.inf, "-", lo_open=True,
+                         error=err)
         for i, (_, _, r0, _) in enumerate(self.piles):
             require_positive(f"piles[{i}] radius", r0, "m", error=err)
 
@@ -188,10 +189,9 @@ class InterfaceCoupling:
             nodes' weighted heights; Gauss: the points'); ``None`` gives the in-situ state:
             ``K0 sigma'_v`` on shafts, ``sigma'_v`` on bases, with the excess pore pressures at
             the start (docs/model.md).
-        quadrature: where the law is evaluated and its state lives: ``"nodal"`` (the interface
-            nodes, Gauss-Lobatto rule; any degree) or ``"gauss"`` (the 2 x 2 Gauss points of
-            every interface facet, consistent facet tangent; Q1 displacements only). The
-            measured comparison is in docs/solver.md ("Interface quadrature").
+        quadrature: where the law's state lives: ``"nodal"`` (the interface nodes, any
+            degree) or ``"gauss"`` (2 x 2 Gauss points per facet; Q1 displacements only;
+            docs/solver.md, "Interface quadrature").
     """
 
     laws: tuple[ConstitutiveLaw | None, ...]
@@ -213,11 +213,9 @@ class Discretisation:
     """Finite-element pair and quadrature.
 
     Attributes:
-        pair: ``"Q2Q1"`` (Taylor–Hood on hexahedra, inf-sup stable) or ``"Q1Q1"`` (equal order,
-            with the pressure-projection stabilisation when ``stabilise``).
-        stabilise: add the Bochev–Dohrmann polynomial-pressure-projection term (Q1Q1 only).
-        stab_factor: multiplies the stabilisation parameter ``tau = 3 / (lambda + 2 mu)``
-            (:func:`~pilegroup.solver.forms.projection_tau`, docs/solver.md).
+        pair: ``"Q2Q1"`` (Taylor–Hood on hexahedra, inf-sup stable) or ``"Q1Q1"`` (equal order).
+        stabilise: Q1Q1's pressure Laplacian in each cell's metric (docs/solver.md).
+        stab_factor: multiplies its ``tau = 3 / (lambda + 2 mu)`` (``forms.projection_tau``).
     """
 
     pair: Literal["Q2Q1", "Q1Q1"] = "Q2Q1"
@@ -249,11 +247,12 @@ class NewtonOptions:
         atol: absolute residual tolerance (kN for u, m^3 for p).
         stol: relative increment tolerance (acceptance once the residual reached round-off).
         max_it: iteration limit; beyond it the step fails (and is cut back).
-        line_search: maximum number of step halvings of the backtracking line search on the
-            scaled residual norm (0: plain Newton); it only acts when a full step does not
-            decrease the residual (e.g. return-mapping branch cycling in perfect plasticity).
+        line_search: most step halvings of the backtracking line search (0: plain Newton);
+            it acts only when a full step does not decrease the scaled residual.
         krylov_forcing: inexact Newton: Krylov solves stop at this fraction of each block's
-            Newton tolerance (``Preset.forcing``); 0: the preset's own tolerance (docs/solver.md).
+            Newton tolerance (``Preset.forcing``); 0: the preset's own tolerance.
+        alt_after, alt_factor: from iteration ``alt_after`` on, a residual within ``alt_factor``
+            times the tolerance is accepted (docs/solver.md, "Newton").
     """
 
     rtol: float = 1e-9
@@ -262,6 +261,8 @@ class NewtonOptions:
     max_it: int = 15
     line_search: int = 4
     krylov_forcing: float = 0.1
+    alt_after: int = 8
+    alt_factor: float = 100.0
 
     def __post_init__(self) -> None:
         require_in_range("krylov_forcing", self.krylov_forcing, 0.0, 1.0, "-", hi_open=True,
@@ -356,7 +357,7 @@ class DisplacementBC:
 class PressureBC:
     """Prescribed excess pore pressure (kPa) on a facet group (drained boundary: 0).
 
-    ``facet=None`` fixes every pressure dof (a drained analysis through the same pipeline).
+    ``facet=None`` (nor ``cells``, ``level``) fixes every pressure dof (a drained analysis).
     A drainage condition on a facet group is not applied in undrained steps (``dt = 0``): the
     instantaneous response has no flow, and at ``t = 0+`` the exact pressure equals its undrained
     value everywhere in the open domain (the drained boundary layer has zero thickness), which no
@@ -370,13 +371,13 @@ class PressureBC:
     action: int | None = None
     """Ground action whose amplitude multiplies ``value`` (e.g. a lowered water table)."""
     cells: str | None = None
-    """A soil cell group whose every pressure dof is prescribed instead of a facet group (a
-    drained layer: an aquifer that holds the water table's pressure); ``facet`` then None."""
+    """Every pressure dof of this soil cell group instead (a drained layer: an aquifer)."""
+    level: float | None = None
+    """The pressure dofs at this elevation (m) instead (a water table below the ground)."""
 
     def __post_init__(self) -> None:
-        if self.cells is not None and self.facet is not None:
-            raise SolverInputError(f"PressureBC: facet = {self.facet!r} and cells ="
-                                   f" {self.cells!r}; allowed: one of them")
+        if sum(v is not None for v in (self.facet, self.cells, self.level)) > 1:
+            raise SolverInputError(f"{self!r}: give one of facet, cells and level")
 
 
 @dataclass(frozen=True)

@@ -17,6 +17,13 @@ by block. A step never accepts a non-converged state.
 A step whose iterations alternate between two states above the tolerance (:func:`cycling`) is
 given up before the iteration limit: the stepper cuts it as any failed step.
 
+Alternate tolerance (ABAQUS's ``R_P`` after ``I_P`` iterations): from iteration ``alt_after``
+on, a residual within ``alt_factor`` times the tolerance is accepted (``StepInfo.alternate``).
+A law with a kink (an interface point at its yield) makes Newton chatter a few times above the
+tolerance without converging, and where in that band an iteration lands differs from machine to
+machine; measured on Pier 667 at h = 0.1 m: 5.9e6, 860, 523, 746, 22.9, 41.7, 22.6, 22.8, 3.55,
+28, 26.8, 3.48, 57.5, 3.56, 28.5, 3.44 times the tolerance, and the step cut.
+
 Inexact Newton: each correction's linear solve may stop once every block's linear residual is
 below ``krylov_forcing`` times that block's tolerance (``NewtonOptions.krylov_forcing``).
 """
@@ -75,8 +82,14 @@ class NewtonSolver:
                 if it >= 1 and (self._small(rn, gap, ref, load_factor) or ok_inc):
                     info.converged = True
                     break
+                if it >= nw.alt_after and self._small(rn, gap, ref, load_factor,
+                                                      nw.alt_factor):
+                    info.converged = info.alternate = True
+                    break
                 if it == nw.max_it:
-                    info.message = f"no convergence in {nw.max_it} iterations; |r| = {rn}"
+                    info.message = (f"no convergence in {nw.max_it} iterations; |r| = {rn}; "
+                                    "largest residual / tolerance by iteration: "
+                                    + ", ".join(f"{r:.3g}" for r in ratios))
                     break
                 if cycling(ratios):
                     info.message = (f"Newton cycles between two states after {it} iterations "
@@ -131,13 +144,14 @@ class NewtonSolver:
             return None
         return nw.krylov_forcing * (nw.rtol * ref + nw.atol)
 
-    def _small(self, rn: np.ndarray, gap: float, ref: np.ndarray, load_factor: float) -> bool:
-        """Residual test of every block (and of the plate force)."""
+    def _small(self, rn: np.ndarray, gap: float, ref: np.ndarray, load_factor: float,
+               factor: float = 1.0) -> bool:
+        """Residual test of every block (and of the plate force), ``factor`` x the tolerance."""
         nw, plate = self.options, self.problem.plate
-        ok = bool(np.all(rn <= nw.rtol * ref + nw.atol))
+        ok = bool(np.all(rn <= factor * (nw.rtol * ref + nw.atol)))
         if plate is not None:
             fscale = max(abs(plate.target(load_factor)), 1e-30)
-            ok = ok and abs(gap) <= nw.rtol * fscale + nw.atol
+            ok = ok and abs(gap) <= factor * (nw.rtol * fscale + nw.atol)
         return ok
 
     def _line_search(self, rn: np.ndarray, gap: float, ref: np.ndarray, dU: float,

@@ -77,6 +77,13 @@ class BiotProblem(MonolithicAlgebra):
         install_later: the structure is installed by an ``install`` stage: until then it is
             held still and the interface carries its initial traction only (the ground moves
             past the piles' place); needs the interface.
+        water_table: elevation (m) of the water table (None: the top of the soil). The soil
+            above it is dry: its skeleton carries its total weight and no pore pressure, its
+            pressure dofs are held at 0; the mesh must have a surface there. Its drained
+            boundary is the caller's (``PressureBC(level=...)``).
+        seepage: ``(elevation m, kPa)`` points of a pore pressure at rest above the hydrostatic
+            one (:class:`~pilegroup.solver.geostatic.SoilColumn`); the layers that hold it are
+            the caller's pressure conditions.
     """
 
     def __init__(
@@ -93,6 +100,8 @@ class BiotProblem(MonolithicAlgebra):
         interface: InterfaceCoupling | None = None,
         installation: InstallationExcess | None = None,
         install_later: bool = False,
+        water_table: float | None = None,
+        seepage: Sequence[tuple[float, float]] = (),
     ) -> None:
         self.md, self.mesh, self.comm = md, md.mesh, md.mesh.comm
         self.disc = disc = disc or Discretisation()
@@ -104,7 +113,7 @@ class BiotProblem(MonolithicAlgebra):
             raise SolverInputError("install_later needs an interface (the piles tied to the"
                                    " soil move with it from the start)")
         self.install_later = install_later
-        self.column = SoilColumn(md, materials, installation)
+        self.column = SoilColumn(md, materials, installation, water_table, seepage)
         xq = self.layout.Q.tabulate_dof_coordinates()
         if self.column.has_excess:
             self.column.set_excess_levels(xq[:, 2], self.comm)
@@ -114,7 +123,8 @@ class BiotProblem(MonolithicAlgebra):
         self.interface = self._define_interface(interface)
         self._define_forms(loads, self_weight)
         self.constraints = Constraints(self.layout, displacement_bcs, pressure_bcs, plates,
-                                       self.interface)
+                                       self.interface, self.column.z_w
+                                       if self.column.has_dry else None)
         self._define_algebra()
         if install_later:
             self.constraints.hold(self.layout, "structure")
@@ -123,10 +133,25 @@ class BiotProblem(MonolithicAlgebra):
         self._itf_force: fem.Form | None = None
         self.load_factor = 0.0
         self.undrained = False
-        for b in self.bodies:
-            b.qp.initialise({})
+        # the laws' clock stands still until the first commit after the initial stress is set
+        # (the geostatic check step takes no time: :meth:`evaluate_laws`)
+        self.at_rest = False
+        self._initialise_laws()
 
     # ------------------------------------------------------------------ construction
+    def _initialise_laws(self) -> None:
+        """Every law's state at the start: the soil at rest where a law needs a stress.
+
+        A law with ``needs_initial_stress`` (Modified Cam Clay, Soft Soil Creep: stiffness
+        and pre-consolidation follow the stress) starts from the geostatic effective stress;
+        every other law from zero stress. The geostatic stage sets it again.
+        """
+        groups_needing = [g.name for b in self.bodies for g in b.qp.groups
+                          if getattr(g.material.law, "needs_initial_stress", False)]
+        stress0 = self.geostatic_stress() if groups_needing else {}
+        for b in self.bodies:
+            b.qp.initialise({name: stress0[name] for name in groups_needing})
+
     def _define_interface(self, coupling: InterfaceCoupling | None) -> NodalInterface | None:
         """The interface object of the coupling (``None`` when the piles are tied)."""
         if coupling is None:
@@ -281,8 +306,9 @@ class BiotProblem(MonolithicAlgebra):
             raise SolverInputError("interface_force: the piles are tied to the soil (no "
                                    "interface)")
         if self._itf_force is None:
-            self._itf_force = fem.form(interface_force_form(self.layout, self.interface),
-                                       entity_maps=self.layout.emaps)
+            self._itf_force = fem.form(
+                interface_force_form(self.layout, self.interface, self.coef),
+                entity_maps=self.layout.emaps)
         V = self.body("structure").V
         vec = fem.assemble_vector(self._itf_force)
         vec.scatter_reverse(la.InsertMode.add)
@@ -347,8 +373,8 @@ class BiotProblem(MonolithicAlgebra):
         """Evaluate every law at the current fields (stress, tangent, interface traction)."""
         t0 = time.perf_counter()
         dt = float(self.coef.dt.value)
-        for b in self.bodies:
-            b.qp.evaluate(dt)
+        for b in self.bodies:  # the soil laws' time: none in the geostatic check step
+            b.qp.evaluate(0.0 if self.at_rest else dt)
         if self.interface is not None:
             self.interface.update(self.body("structure").u, self.body("soil").u, dt)
         self.timings["law"] += time.perf_counter() - t0
@@ -384,6 +410,7 @@ class BiotProblem(MonolithicAlgebra):
         for st in self._stateful():
             st.commit()
         self.layout.commit_fields()
+        self.at_rest = False
 
     def rollback(self) -> None:
         """Return to the last committed step (fields, plate and quadrature state)."""
@@ -436,6 +463,12 @@ class BiotProblem(MonolithicAlgebra):
         self.initial.set_pressure()
 
     def set_initial_stress(self, stress0: Mapping[str, np.ndarray | None]) -> None:
-        """Initialise every group's law state with ``stress0[name]`` ((n,6) Mandel kPa)."""
+        """Initialise every group's law state with ``stress0[name]`` ((n,6) Mandel kPa).
+
+        Until the next :meth:`commit` the soil laws see no time (``dt = 0``): the step that
+        checks the initial equilibrium borrows its size from the next step for the flow of
+        the water only, and a creeping law (Soft Soil Creep) must not creep in it.
+        """
         for b in self.bodies:
             b.qp.initialise(dict(stress0))
+        self.at_rest = True

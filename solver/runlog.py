@@ -30,6 +30,8 @@ class RunLog:
 
     steps: list[StepRecord] = field(default_factory=list)
     rejected: int = 0
+    alternate: int = 0
+    """Steps accepted by Newton's alternate tolerance (``solver.newton``)."""
     geostatic_max_u: float | None = None
     wall_s: float = 0.0
     capacity_end: dict[str, Any] | None = None

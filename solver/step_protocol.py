@@ -28,6 +28,7 @@ class StepInfo:
     ksp_its: int = 0
     ksp_max: int = 0  # Krylov iterations of the step's hardest Newton solve
     linear_failure: bool = False  # the step failed in a Krylov solve (not in Newton)
+    alternate: bool = False  # converged by Newton's alternate tolerance (solver/newton.py)
     residuals: list[tuple[float, ...]] = field(default_factory=list)
     message: str = ""
     seconds: float = 0.0

@@ -44,6 +44,7 @@ saved or the run stopped (docs/checkpoint.md).
 
 from __future__ import annotations
 
+import logging
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -53,6 +54,8 @@ from pilegroup.solver.exports import Export
 from pilegroup.solver.inputs import SolverStage, StepControl
 from pilegroup.solver.runlog import RunLog, StepRecord
 from pilegroup.solver.step_protocol import StepInfo, StepProblem
+
+log = logging.getLogger(__name__)
 
 Callback = Callable[[StepProblem, float, str], None]
 
@@ -122,6 +125,11 @@ class AdaptiveStepper:
                         on_boundary(t, False)
                     continue
                 problem.commit()
+                if info.alternate:
+                    self.log.alternate += 1
+                    log.info("stage %r: step t = %.6g + %.3g day accepted by the alternate "
+                             "tolerance after %d Newton iterations", stage, t, dt,
+                             info.newton_its)
                 self.log.steps.append(StepRecord(stage, t_new, dt, load_factor(t_new),
                                                  info.newton_its, info.ksp_its, info.seconds,
                                                  info.ksp_max))
@@ -150,6 +158,8 @@ class AdaptiveStepper:
         ``dt`` and hands over only below ``dt_min``. The step is then tried again unchanged.
         """
         ts = self.ts
+        log.info("stage %r: step t = %.6g + %.3g day rejected after %d Newton iterations: %s",
+                 stage, t, dt, info.newton_its, info.message)
         problem.rollback()
         self.log.rejected += 1
         self.dt = dt * ts.cut

@@ -27,6 +27,7 @@ one value names the key, the value, its unit and what is allowed, in the form of
 
 from __future__ import annotations
 
+import re
 from typing import Self
 
 #: A value shown in a message is cut to its first :data:`SHOWN_CHARS` characters when it is
@@ -48,14 +49,36 @@ def shorten(value: object) -> str:
     return f"{text[:SHOWN_CHARS]}... ({n} characters)"
 
 
+#: List keys whose entries people count from 1 (layer 1 is the top layer, pile 1 the first
+#: pile, as in the mesh groups ``soil_1`` and ``pile_1``), with the word for one entry. A key
+#: path keeps the TOML index, which counts from 0 as ``--set`` takes it.
+ENTRY_WORDS = {"layers": "layer", "stages": "stage", "layout": "pile", "positions_m": "pile",
+               "piles": "pile"}
+_ENTRY = re.compile(r"(?:^|[.\s])(" + "|".join(ENTRY_WORDS) + r")\[(\d+)\]")
+
+
+def entry_name(key: str) -> str:
+    """The entry a key path names, counted from 1: ``layers[1].nu`` -> ``layer 2``; else ``""``.
+
+    The first indexed list of :data:`ENTRY_WORDS` in the path decides
+    (``piles.layout[0].diameter_m`` -> ``pile 1``).
+    """
+    m = _ENTRY.search(key)
+    return f"{ENTRY_WORDS[m.group(1)]} {int(m.group(2)) + 1}" if m else ""
+
+
 def describe(key: str, value: object, allowed: str, unit: str = "") -> str:
-    """One line naming a rejected value, e.g. ``layers[2].nu = 0.55 (-): must be in (0, 0.5)``.
+    """One line naming a rejected value, e.g. ``layers[2].nu (layer 3) = 0.55 (-): must be ...``.
 
     Strings are quoted; the unit is shown in brackets when given; a long value is shortened
-    (:func:`shorten`).
+    (:func:`shorten`). A key path into a list of layers, stages or piles is followed by the
+    entry counted from 1 (:func:`entry_name`): messages count layers, stages and piles the
+    same way, from 1, while the path keeps the index ``--set`` takes.
     """
     unit_txt = f" ({unit})" if unit else ""
-    return f"{key} = {shorten(value)}{unit_txt}: {allowed}"
+    entry = entry_name(key)
+    entry_txt = f" ({entry})" if entry else ""
+    return f"{key}{entry_txt} = {shorten(value)}{unit_txt}: {allowed}"
 
 
 class PilegroupError(Exception):
@@ -71,8 +94,8 @@ class ScenarioError(PilegroupError, ValueError):
     """A scenario file or value (or a geometry specification) is invalid.
 
     The message always names the key (dotted path as in the TOML file), the value, its unit and
-    what is allowed, e.g. ``layers[2].nu = 0.55 (-): must be in (0, 0.5)``; the four parts are
-    also attributes, so that the loader can prefix the key with the path of its table.
+    what is allowed, e.g. ``layers[2].nu (layer 3) = 0.55 (-): must be in (0, 0.5)``; the four
+    parts are also attributes, so that the loader can prefix the key with the path of its table.
     """
 
     def __init__(self, key: str, value: object, allowed: str, unit: str = "") -> None:
@@ -186,5 +209,5 @@ class RunInterrupted(PilegroupError):
 __all__ = [
     "ConstitutiveError", "ConvergenceError", "FolderBusy", "OutputError", "PilegroupError",
     "RunInterrupted", "ScenarioError", "SolverError", "SolverInputError", "StepFailure",
-    "describe", "shorten",
+    "describe", "entry_name", "shorten",
 ]

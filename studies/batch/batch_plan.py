@@ -36,6 +36,7 @@ from typing import Any
 
 from pilegroup.errors import ScenarioError
 from pilegroup.fileio import json_default
+from pilegroup.geometry.adapter import resolve_geometry
 from pilegroup.model import BUNDLED, Scenario, load_scenario
 from pilegroup.model.mesh_estimate import estimated_cells
 
@@ -214,9 +215,15 @@ def scenario_digest(resolved: Scenario | dict[str, Any]) -> str:
 
 
 def resolve_case(plan: BatchPlan, case: BatchCase) -> ResolvedCase:
-    """The validated scenario of ``case``; a problem names the case and the key."""
+    """The validated scenario of ``case``; a problem names the case and the key.
+
+    Validated as ``pilegroup scenario validate`` does: the scenario and its geometry
+    (:func:`~pilegroup.geometry.adapter.resolve_geometry`), so that no case of a batch starts
+    while another is refused for its input.
+    """
     try:
         sc = load_scenario(plan.scenario, case.override_dict())
+        resolve_geometry(sc)
     except ScenarioError as exc:
         raise ScenarioError(f"case {case.name!r}: {exc.key}", exc.value, exc.allowed,
                             exc.unit) from None

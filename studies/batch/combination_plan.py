@@ -48,6 +48,7 @@ from pathlib import Path
 from typing import Any
 
 from pilegroup.errors import ScenarioError
+from pilegroup.geometry.adapter import resolve_geometry
 from pilegroup.model import BUNDLED, Scenario, bundled_text, load_scenario
 from pilegroup.model.loader import apply_overrides
 from pilegroup.studies.batch.batch_plan import (
@@ -263,10 +264,13 @@ def combination_plan_from_dict(data: dict[str, Any], base_dir: Path | None = Non
 
 
 def check_scenarios(plan: CombinationPlan) -> None:
-    """Build and validate every combination's scenario; a problem names the combination."""
+    """Build and validate every combination's scenario; a problem names the combination.
+
+    Validated as ``pilegroup scenario validate`` does: the scenario and its geometry.
+    """
     for c in plan.combinations:
         try:
-            load_scenario(plan.scenario, dict(plan.overrides(c)))
+            resolve_geometry(load_scenario(plan.scenario, dict(plan.overrides(c))))
         except ScenarioError as exc:
             raise ScenarioError(f"combination {c.name!r}: {exc.key}", exc.value, exc.allowed,
                                 exc.unit) from None

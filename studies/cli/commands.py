@@ -29,11 +29,13 @@ from tqdm import tqdm
 
 from pilegroup.errors import OutputError, RunInterrupted
 from pilegroup.fileio import write_text_atomic
-from pilegroup.model import BUNDLED, PilegroupError, ScenarioError, bundled_text, load_scenario
-from pilegroup.model.loader import parse_override
+from pilegroup.model import BUNDLED, PilegroupError, ScenarioError, load_scenario
 from pilegroup.studies.cli.batch_commands import COMMANDS as BATCH_COMMANDS
 from pilegroup.studies.cli.batch_commands import memory_size
 from pilegroup.studies.cli.lab_commands import COMMANDS as LAB_COMMANDS
+from pilegroup.studies.cli.scenario_commands import SET_HELP, scenario_arguments
+from pilegroup.studies.cli.scenario_commands import overrides as _overrides
+from pilegroup.studies.cli.scenario_commands import world_rank as _world_rank
 from pilegroup.studies.run.interrupt import abort_job
 
 log = logging.getLogger("pilegroup")
@@ -41,17 +43,11 @@ log = logging.getLogger("pilegroup")
 EXIT_INPUT = 2
 EXIT_FAILED = 1
 SCENARIO_HELP = "scenario TOML file or bundled name, e.g. pier667"
-SET_HELP = ("set a scenario key before validation (dotted path, TOML value), e.g. "
-            "--set numerics.mesh.size_m=0.6 --set layers[0].E_MPa=3; repeatable")
-
-
-def _overrides(args: argparse.Namespace) -> dict[str, object]:
-    """The ``--set`` overrides of a command (later ones win)."""
-    return dict(parse_override(t) for t in (getattr(args, "set", None) or []))
 
 #: Descriptions of the sub-commands (``pilegroup COMMAND --help``).
 DESCRIPTIONS = {
-    "scenario": "Show a bundled scenario or validate a scenario file.",
+    "scenario": ("Show a bundled scenario, validate a scenario file (as a run does before "
+                 "meshing) or list every scenario key (docs/scenario.md)."),
     "run": ("Validate the scenario, build its mesh and run every stage that is implemented; write "
             "outputs and summary.json to --out. One run at a time writes into a folder: a "
             "second run into the --out of a running one exits 2 naming the running process."),
@@ -68,11 +64,14 @@ DESCRIPTIONS = {
              "~/.cache/pilegroup/meshes)."),
     "verify": ("Run verification cases through the real pipeline and print error, tolerance and "
                "pass/fail per case (exit 1 if any fails). Cases: terzaghi (1D consolidation), "
+               "terzaghi-water-table (the same below 2 m of dry soil), "
                "mandel (Mandel-Cryer effect), triaxial (Mohr-Coulomb failure load), "
                "shaft-capacity (pile pushed to shaft failure), interface-patch (solver interface "
                "vs pointwise law), tied-limit (stiff interface vs tied pile), "
-               "undrained-loading (a uniform fill on five meshes: uniform pressure), and the "
-               "ground, downdrag, lateral and capacity cases. Works under mpirun -n 2."),
+               "undrained-loading (a uniform fill on five meshes: uniform pressure), "
+               "mcc-undrained-triaxial, mcc-compression-line, ssc-creep, ssc-oedometer (the "
+               "soft-soil laws), and the ground, downdrag, lateral and capacity cases. Works "
+               "under mpirun -n 2."),
     "bench": ("constitutive: law updates per second; meshing: cells, quality and time for the "
               "paper's five mesh sizes; verification: run time against error for Terzaghi and "
               "Mandel (table, JSON and PNG); pier: the whole job per mesh size and symmetry "
@@ -95,53 +94,12 @@ DESCRIPTIONS = {
 }
 
 
-def _world_rank() -> int:
-    try:
-        from mpi4py import MPI
-    except ImportError:  # pragma: no cover - mpi4py always ships with dolfinx
-        return 0
-    return MPI.COMM_WORLD.rank
-
-
 def setup_logging(verbose: int) -> None:
     """Log to stderr on rank 0 only (other ranks log warnings and errors)."""
     level = logging.DEBUG if verbose > 1 else logging.INFO
     if _world_rank() != 0:
         level = logging.WARNING
     logging.basicConfig(level=level, format="%(levelname)s %(name)s: %(message)s")
-
-
-def _cmd_scenario_show(args: argparse.Namespace) -> int:
-    if _world_rank() == 0:
-        sys.stdout.write(bundled_text(args.name))
-    return 0
-
-
-def _cmd_scenario_validate(args: argparse.Namespace) -> int:
-    sc = load_scenario(args.file)
-    if _world_rank() == 0:
-        print(f"{args.file}: valid scenario {sc.name!r}: {len(sc.layers)} layers, "
-              f"{sc.piles.count} piles, {len(sc.stages)} stages, end {sc.time.end_day:g} day")
-        print(f"  {sc.discretisation_line()}")
-        warning = sc.discretisation_warning()
-        if warning:
-            print(f"warning: {warning}", file=sys.stderr)
-    return 0
-
-
-def _scenario_arguments(p: argparse.ArgumentParser) -> None:
-    ssub = p.add_subparsers(dest="action", required=True, metavar="ACTION")
-    show = ssub.add_parser("show", help="print a bundled scenario (TOML, with its comments)",
-                           description="Print a bundled scenario; copy it to start your own.")
-    show.add_argument("name", nargs="?", default="pier667", choices=BUNDLED,
-                      help="bundled scenario name (default: pier667)")
-    show.set_defaults(func=_cmd_scenario_show)
-    val = ssub.add_parser("validate", help="check a scenario file and report the first problem",
-                          description="Check a scenario TOML file: unknown, missing or mistyped "
-                          "keys and out-of-range values are reported with the key, the value, "
-                          "its unit and what is allowed (exit code 2).")
-    val.add_argument("file", help="scenario TOML file (or a bundled name)")
-    val.set_defaults(func=_cmd_scenario_validate)
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
@@ -359,7 +317,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("-v", "--verbose", action="count", default=0, help="more log output")
     sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for name, help_, add_arguments in (
-        ("scenario", "show or validate scenario files", _scenario_arguments),
+        ("scenario", "show, validate or list the keys of scenario files", scenario_arguments),
         ("run", "run a scenario (main job)", _run_arguments),
         ("stiffness", "the cap's 6 x 6 stiffness matrix at the end of a run",
          _stiffness_arguments),

@@ -21,7 +21,7 @@ import numpy as np
 from pilegroup.errors import CapacityReached
 from pilegroup.fileio import write_text_atomic
 from pilegroup.model import Scenario
-from pilegroup.model.analysis import PLUNGING_STIFFNESS_RATIO
+from pilegroup.model.stages import PLUNGING_STIFFNESS_RATIO
 from pilegroup.solver import BiotProblem
 from pilegroup.studies.results.capacity import (
     SETTLEMENT_PER_DIAMETER,

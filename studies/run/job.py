@@ -45,7 +45,10 @@ def run_scenario(sc: Scenario, out: Path, mesh_size: float | None = None,
     not run again (its summary is returned). Without it, an older checkpoint in ``out`` is
     removed first.
 
-    Before anything is written or meshed the run's peak memory per rank is estimated and
+    The scenario's geometry is resolved first, before the output folder is locked
+    (:func:`~pilegroup.geometry.adapter.resolve_geometry`): a layout the mesher cannot take
+    is refused there, with the line ``pilegroup scenario validate`` gives, and nothing is
+    written. Before anything is written or meshed the run's peak memory per rank is estimated and
     compared with the memory available
     (:func:`~pilegroup.studies.run.memory_check.memory_check`): a run that cannot fit raises
     :class:`~pilegroup.errors.MachineTooSmall` unless ``force``. ``memory_mb``: the memory
@@ -62,12 +65,16 @@ def run_scenario(sc: Scenario, out: Path, mesh_size: float | None = None,
             sc.numerics, mesh=sc.numerics.mesh.with_given(size_m=mesh_size)))
     if resume and stop_after != "solve":
         raise ScenarioError("--stop-after", stop_after, "only 'solve' with --resume")
+    # the one resolution of the scenario's geometry in a run; it refuses what the scenario's
+    # validation refuses for its geometry, before the output folder is touched
+    geo = resolve_geometry(sc)
     with folder_lock(out, comm):
-        return _locked_run(sc, out, stop_after, comm, resume, t0, force, memory_mb)
+        return _locked_run(sc, geo, out, stop_after, comm, resume, t0, force, memory_mb)
 
 
-def _locked_run(sc: Scenario, out: Path, stop_after: str, comm: MPI.Comm, resume: bool,
-                t0: float, force: bool = False, memory_mb: float | None = None) -> JobSummary:
+def _locked_run(sc: Scenario, geo: ResolvedGeometry, out: Path, stop_after: str,
+                comm: MPI.Comm, resume: bool, t0: float, force: bool = False,
+                memory_mb: float | None = None) -> JobSummary:
     """:func:`run_scenario` once the folder is locked."""
     manifest = check_resume(out, sc, comm) if resume else None
     if manifest is not None:
@@ -82,7 +89,6 @@ def _locked_run(sc: Scenario, out: Path, stop_after: str, comm: MPI.Comm, resume
         warning = sc.discretisation_warning()
         if warning:
             log.warning("%s", warning)
-    geo = resolve_geometry(sc)  # the one resolution of the scenario's geometry in a run
     # before anything is written or meshed
     memory = memory_check(sc, geo, comm, force, memory_mb)
     if comm.rank == 0:

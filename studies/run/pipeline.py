@@ -5,9 +5,9 @@ and cap are elastic solids, either tied to the soil (one displacement field; ``i
 "tied"``, which also bonds the cap bottom to the ground surface) or on their own displacement
 field joined to the soil by the interface law of each layer (``elastic``/``viscoplastic``; the
 cap is then not in contact with the soil).
-Boundaries (docs/model.md): bottom fixed, sides roller, ground surface drained (p = 0); every
-other boundary impermeable. The cap load is a uniform pressure on the cap top (or on the pile
-heads when there is no cap).
+Boundaries (docs/model.md): bottom fixed, sides roller, ground surface (or the water table
+below it) drained (p = 0); every other boundary impermeable. The cap load is a uniform
+pressure on the cap top (or on the pile heads when there is no cap).
 """
 
 from __future__ import annotations
@@ -22,14 +22,19 @@ from typing import Any
 
 from tqdm import tqdm
 
+from pilegroup.constitutive.base import ConstitutiveLaw
+from pilegroup.constitutive.cam_clay import ModifiedCamClay
 from pilegroup.constitutive.interface_law import PileSoilInterface
+from pilegroup.constitutive.soft_soil_creep import SoftSoilCreep
 from pilegroup.constitutive.soil import DruckerPrager, LinearElastic, MohrCoulomb
 from pilegroup.errors import StepFailure
 from pilegroup.geometry import groups
 from pilegroup.geometry.adapter import ResolvedGeometry
 from pilegroup.geometry.meshdata import MeshData
 from pilegroup.geometry.symmetry import PLANES
-from pilegroup.model import Scenario, ScenarioError, Stage
+from pilegroup.model import Scenario, Stage
+from pilegroup.model.insitu import own_levels, seepage
+from pilegroup.model.soil_models import k0nc, layer_model
 from pilegroup.solver import (
     GAMMA_W,
     BiotProblem,
@@ -101,12 +106,27 @@ def band_layers(h: float) -> int:
     return max(1, math.ceil(BAND_WIDTH_M / h - 1e-9))
 
 
-def soil_law(sc: Scenario, j: int) -> LinearElastic | MohrCoulomb | DruckerPrager:
-    """The constitutive law of soil layer ``j`` (kPa, degrees) by ``soil.model``."""
+def soil_law(sc: Scenario, j: int) -> ConstitutiveLaw:
+    """The constitutive law of soil layer ``j`` (kPa, degrees, days) by its soil model.
+
+    The layer's ``model``, else ``soil.model``; the critical-state laws' pre-consolidation from
+    the layer's ``OCR`` or ``POP_kPa`` at each point's geostatic stress, Cam Clay's ``K0nc``
+    that of the layer's K0 (docs/model.md, "Soil models per layer").
+    """
     lay = sc.layers[j]
-    if sc.soil.model == "linear_elastic":
+    model = layer_model(lay, sc.soil)
+    pre = {"OCR": 1.0 if lay.OCR is None else lay.OCR,
+           "POP": 0.0 if lay.POP_kPa is None else lay.POP_kPa}
+    if model == "modified_cam_clay":
+        return ModifiedCamClay(lay.lam, lay.kappa, lay.e0, M=lay.M,  # type: ignore[arg-type]
+                               phi_cs_deg=lay.phi_cs_deg, nu=lay.nu, K0nc=k0nc(lay), **pre)
+    if model == "soft_soil_creep":
+        return SoftSoilCreep(lay.lambda_star, lay.kappa_star,  # type: ignore[arg-type]
+                             lay.mu_star, lay.phi_deg, c=lay.c_kPa or 0.0, nu_ur=lay.nu_ur,
+                             tau=lay.tau_ref_day, **pre)
+    if model == "linear_elastic":
         return LinearElastic(lay.E, lay.nu)
-    cls = MohrCoulomb if sc.soil.model == "mohr_coulomb" else DruckerPrager
+    cls = MohrCoulomb if model == "mohr_coulomb" else DruckerPrager
     return cls(lay.E, lay.nu, lay.c_kPa, lay.phi_deg, lay.psi_deg)
 
 
@@ -119,9 +139,9 @@ def build_problem(sc: Scenario, geo: ResolvedGeometry, md: MeshData, preset: str
     materials: dict[str, SoilMaterial | ElasticSolid] = {}
     for j, lay in enumerate(sc.layers):
         materials[groups.soil_layer(j + 1)] = SoilMaterial(
-            soil_law(sc, j), lay.k_m_per_day, lay.porosity, lay.gamma_kN_per_m3, K0=lay.K0,
+            soil_law(sc, j), lay.k_m_per_day, lay.porosity, lay.gamma_kN_per_m3, K0=lay.k0,
             excess_ratio=lay.excess_pore_pressure_ratio, excess_kPa=lay.excess_pore_pressure_kPa,
-            k_h_m_per_day=lay.k_h_m_per_day)
+            k_h_m_per_day=lay.k_h_m_per_day, gamma_unsat=lay.gamma_unsat_kN_per_m3)
     solid = ElasticSolid(sc.structure.E, sc.structure.nu)
     for name in md.cell_names:
         if groups.is_structure(name):
@@ -146,7 +166,14 @@ def build_problem(sc: Scenario, geo: ResolvedGeometry, md: MeshData, preset: str
     return BiotProblem(md, materials, disc, displacement_bcs=dbcs,
                        pressure_bcs=drainage(sc), loads=loads, options=opts,
                        interface=interface_coupling(sc, h), installation=installation(sc),
-                       install_later=sc.installation_stage is not None)
+                       install_later=sc.installation_stage is not None,
+                       water_table=water_table(sc),
+                       seepage=[(-d, u) for d, u in seepage(sc.site, sc.layers)])
+
+
+def water_table(sc: Scenario) -> float | None:
+    """Elevation (m) of a water table below the ground surface; None: at the surface."""
+    return -sc.site.water_table_depth_m if sc.site.water_table_depth_m > 0.0 else None
 
 
 def installation(sc: Scenario) -> InstallationExcess | None:
@@ -186,23 +213,26 @@ def drainage(sc: Scenario) -> list[PressureBC]:
     """The drained ground surface and every drained layer (an aquifer), at the same pressure.
 
     A lowered water table lowers the aquifers' pressure with it (pumping lowers the head of the
-    aquifer it draws from; docs/model.md, "Ground that moves").
+    aquifer it draws from; docs/model.md, "Ground that moves"), not a layer's own piezometric
+    level (the region holds it, :func:`~pilegroup.model.insitu.own_levels`).
     """
     top = ground_drainage(sc)
     return [top] + [PressureBC(None, top.value, action=top.action, cells=groups.soil_layer(j + 1))
-                    for j, lay in enumerate(sc.layers) if lay.drained]
+                    for j, lay in enumerate(sc.layers) if lay.drained] \
+        + [PressureBC(None, u, cells=groups.soil_layer(j + 1))
+           for j, u in own_levels(sc.site, sc.layers)]
 
 
 def ground_drainage(sc: Scenario) -> PressureBC:
-    """The drained ground surface: excess pore pressure 0, or ``-gamma_w x drawdown`` (kPa).
+    """The drained top of the saturated soil: excess pore pressure 0, or ``-gamma_w x drawdown``.
 
-    A lowered water table (groundwater stages) prescribes the drop of the pore pressure on the
-    drained surface; the soil above the new water table stays saturated (docs/model.md,
-    "Ground that moves").
+    The ground surface, or the water table below it (docs/model.md, "The ground at rest"). A
+    lowered water table (groundwater stages) prescribes the drop of the pore pressure (kPa)
+    there; the soil above the new water table stays saturated ("Ground that moves").
     """
-    if not any(st.kind == "groundwater" for st in sc.stages):
-        return PressureBC(groups.GROUND)
-    return PressureBC(groups.GROUND, value=-GAMMA_W, action=len(ground_actions(sc)))
+    z, lowered = water_table(sc), any(st.kind == "groundwater" for st in sc.stages)
+    return PressureBC(groups.GROUND if z is None else None, -GAMMA_W if lowered else 0.0,
+                      action=len(ground_actions(sc)) if lowered else None, level=z)
 
 
 def full_load_area(sc: Scenario, geo: ResolvedGeometry, md: MeshData) -> float:
@@ -232,7 +262,8 @@ def interface_law(sc: Scenario, j: int, mesh_size: float, base: bool = False
         return None
     opt = sc.interface
     return PileSoilInterface(
-        K=ip.K, n=ip.n, R_f=ip.R_f, c=lay.c_kPa, phi_deg=lay.phi_deg, eta=ip.eta,
+        K=ip.K, n=ip.n, R_f=ip.R_f, c=lay.c_kPa, phi_deg=lay.phi_deg,
+        eta=1.0 if ip.eta is None else ip.eta,  # an elastic interface has no viscosity
         k_normal=opt.normal_stiffness_factor * lay.E / mesh_size, delta_deg=ip.delta_deg,
         N=opt.N, variant=opt.variant, integrator=opt.integrator,
         viscous=opt.mode == "viscoplastic", bearing=ip.base_bearing_kPa if base else None)
@@ -245,9 +276,6 @@ def interface_coupling(sc: Scenario, mesh_size: float) -> InterfaceCoupling | No
     """
     if sc.interface.mode == "tied":
         return None
-    if not sc.interface.base:
-        raise ScenarioError("interface.base", False, "only true (a pile base interface) is "
-                            "supported with interface.mode = elastic/viscoplastic", "-")
     layers = range(len(sc.layers))
     laws = tuple(interface_law(sc, j, mesh_size) for j in layers) \
         + tuple(interface_law(sc, j, mesh_size, base=True) for j in layers)

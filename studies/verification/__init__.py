@@ -7,7 +7,8 @@ the tolerance and the source of the reference. Modules:
 * ``registry``: :class:`CaseResult`, the :func:`register` decorator and :data:`CASES`;
 * ``common``: communicator, point evaluation, box boundary conditions, small meshes and the
   problem builders the cases share;
-* ``consolidation``: ``terzaghi``, ``mandel`` (with their closed forms; the first-step check);
+* ``consolidation``: ``terzaghi``, ``terzaghi-water-table``, ``mandel`` (with their closed
+  forms; the first-step check);
 * ``soil``: ``triaxial`` (and the strip-footing measurements);
 * ``interface_cases``: ``shaft-capacity``, ``interface-patch``, ``tied-limit``;
 * ``ground_cases``: ``consolidation-surcharge`` (ground that moves);
@@ -20,6 +21,10 @@ the tolerance and the source of the reference. Modules:
   pipeline);
 * ``undrained_cases``: ``undrained-loading`` (a uniform fill, undrained, on the meshes of
   bundled and random layouts, the whole run pipeline);
+* ``soft_soil_cases``: ``mcc-undrained-triaxial``, ``mcc-compression-line``, ``ssc-creep``
+  (Modified Cam Clay and Soft Soil Creep at one material point against closed forms) and
+  ``ssc-oedometer`` (a Soft Soil Creep column through the solver against the 1D reference of
+  ``soft_soil_column``);
 * ``runner``: :func:`run_cases` and :func:`main`
   (``python -m pilegroup.studies.verification [CASE ...] [--size fast|bench] [--json]``,
   also under ``mpirun -n 2``; ``pilegroup verify``).
@@ -38,6 +43,7 @@ from pilegroup.studies.verification import (  # noqa: F401
     lateral_cases,
     capacity_cases,
     undrained_cases,
+    soft_soil_cases,
 )
 # isort: on
 
@@ -50,6 +56,7 @@ from pilegroup.studies.verification.consolidation import (
     terzaghi,
     terzaghi_degree,
     terzaghi_series,
+    terzaghi_water_table,
 )
 from pilegroup.studies.verification.interface_cases import (
     interface_patch,
@@ -69,4 +76,4 @@ __all__ = ["CASES", "CaseResult", "eval_points", "first_step_oscillation",
            "mandel_centre_pressure",
            "oscillation_measure", "register", "run_cases", "shaft_capacity",
            "shaft_profile_oscillation", "strip_footing", "terzaghi", "terzaghi_degree",
-           "terzaghi_series", "tied_limit", "triaxial"]
+           "terzaghi_series", "terzaghi_water_table", "tied_limit", "triaxial"]

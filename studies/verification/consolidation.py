@@ -1,4 +1,4 @@
-"""Consolidation cases: Terzaghi's column and Mandel's slab against their closed forms.
+"""Consolidation cases: Terzaghi's column (also under dry soil) and Mandel's slab.
 
 Each case meshes a column or slab with :func:`pilegroup.geometry.box.build_box`, runs a
 :class:`~pilegroup.solver.BiotProblem` through :func:`~pilegroup.solver.run_stages` and returns a
@@ -12,7 +12,7 @@ from __future__ import annotations
 import functools
 import math
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -29,6 +29,7 @@ from pilegroup.solver import (
     PressureBC,
     RigidPlate,
     SolverOptions,
+    SolverStage,
     StepControl,
     SurfaceLoad,
     run_stages,
@@ -44,9 +45,9 @@ from pilegroup.studies.verification.common import (
 )
 from pilegroup.studies.verification.registry import CaseResult, register
 
-__all__ = ["MandelSlab", "TerzaghiColumn", "first_step_oscillation", "mandel",
-           "mandel_centre_pressure", "mandel_roots", "oscillation_measure", "terzaghi",
-           "terzaghi_degree", "terzaghi_series"]
+__all__ = ["MandelSlab", "TerzaghiColumn", "TerzaghiWaterTable", "first_step_oscillation",
+           "mandel", "mandel_centre_pressure", "mandel_roots", "oscillation_measure", "terzaghi",
+           "terzaghi_degree", "terzaghi_series", "terzaghi_water_table"]
 
 
 # ---------------------------------------------------------------------------- closed forms
@@ -216,6 +217,98 @@ def terzaghi(size: str = "fast", pair: str = "Q2Q1", nz: int | None = None,
                  "rows": rows,
                  "c_v_m2_per_day": col.cv, "p0_kPa": col.p0, "ranks": comm.size,
                  "timings": problem.timings})
+
+
+# ---------------------------------------------------------------------------- water table
+@dataclass(frozen=True)
+class TerzaghiWaterTable(TerzaghiColumn):
+    """Terzaghi's column under ``dry`` m of dry soil: the water table ``dry`` m down.
+
+    1 x 1 x (``dry`` + ``H``) m with its weight (``gamma_sat`` below the water table,
+    ``gamma_unsat`` above), ``q`` (kPa) on the top; sides on rollers, bottom fixed and
+    impermeable. The saturated ``H`` m are drained at the water table (the top of the dry
+    soil is not a boundary of the water), the dry soil carries ``q`` down to it.
+    """
+
+    dry: float = 2.0
+    gamma_sat: float = 20.0
+    gamma_unsat: float = 17.0
+
+    def settlement(self, T: float) -> float:
+        """Settlement (m) of the top: the dry soil's ``q dry / m`` plus Terzaghi's below it."""
+        return self.q * self.dry / self.m_oed + super().settlement(T)
+
+    def problem(self, md: MeshData, disc: Discretisation,
+                options: SolverOptions | None = None) -> BiotProblem:
+        """The column's problem on the box mesh ``md`` (a node level at the water table)."""
+        soil = replace(self.soil.material(), gamma_sat=self.gamma_sat,
+                       gamma_unsat=self.gamma_unsat)
+        return BiotProblem(md, {groups.soil_layer(1): soil}, disc, displacement_bcs=box_bcs(),
+                           pressure_bcs=[PressureBC(None, level=-self.dry)],
+                           loads=[SurfaceLoad(groups.GROUND, self.q)], options=options,
+                           water_table=-self.dry)
+
+
+def _water_table_record(col: TerzaghiWaterTable, times: list[float],
+                        rows: list[dict[str, float]], pb: BiotProblem, t: float,
+                        stage: str) -> None:
+    """Milestone callback: pressure (saturated and dry soil) and settlement errors."""
+    for T, tm in zip(TERZAGHI_T_V, times, strict=True):
+        if abs(t - tm) <= 1e-9 * tm:
+            zq = np.linspace(-col.dry - col.H, -col.dry, 201)
+            ph = p_along(pb, zq, 0.5, 0.5)
+            pe = terzaghi_series(-col.dry - zq, col.H, T, col.p0)
+            e_p = float(np.sqrt(np.trapezoid((ph - pe) ** 2, zq) / np.trapezoid(pe**2, zq)))
+            p_dry = float(np.abs(p_along(pb, np.linspace(-col.dry, 0.0, 21), 0.5, 0.5)).max())
+            s_h = -float(np.atleast_1d(eval_points(pb.u, np.array([[0.5, 0.5, 0.0]])))[2])
+            s_e = col.settlement(T)
+            rows.append({"T_v": T, "t_day": t, "err_p": e_p, "p_dry_kPa": p_dry,
+                         "settlement_m": s_h, "settlement_ref_m": s_e,
+                         "err_s": abs(s_h - s_e) / s_e})
+
+
+@register("terzaghi-water-table")
+def terzaghi_water_table(size: str = "fast", pair: str = "Q2Q1", preset: str = "direct",
+                         comm: MPI.Comm | None = None) -> CaseResult:
+    """Terzaghi's column with the water table 2 m below the loaded top (Terzaghi 1925).
+
+    12 m of soil with its weight (20 kN/m^3 saturated, 17 kN/m^3 above the water table), the
+    water table 2 m down, E = 10 MPa, nu = 0.3, k = 1e-3 m/day, n = 0.4: a geostatic stage,
+    then 100 kPa on the top at once (one undrained step) and consolidation. The reference is
+    :func:`terzaghi`'s series for the 10 m below the water table, drained there, plus the dry
+    soil's oedometric compression ``q dry / m``; the dry soil carries no pore pressure.
+
+    Error: the largest, over T_v = 0.05, 0.2, 0.5, 1.0, of the relative L2 error of p over the
+    saturated depth, the relative settlement error and the largest |p| in the dry soil over
+    ``p0``. Tolerance 1 %.
+    """
+    comm = comm or world()
+    t0 = time.perf_counter()
+    nz, spd, dT_max = {"fast": (16, 16, 2e-3), "bench": (32, 32, 1e-3)}[size]
+    col = TerzaghiWaterTable()
+    levels = np.concatenate([graded_levels(-col.dry - col.H, -col.dry, nz, ratio=4.0)[:-1],
+                             np.linspace(-col.dry, 0.0, 3)])
+    md = build_box(comm, (0.0, 1.0), (0.0, 1.0), levels, 1, 1)
+    problem = col.problem(md, Discretisation(pair=pair),
+                          SolverOptions(preset=preset, prefix=f"terzwt_{pair}_"))
+    times = [T * col.H**2 / col.cv for T in TERZAGHI_T_V]
+    ts = StepControl(dt0=1e-4 * times[-1], dt_min=1e-12, dt_max=dT_max * times[-1],
+                      grow=10.0 ** (1.0 / spd), hold=1, milestones=tuple(times[:-1]))
+    rows: list[dict[str, float]] = []
+    log = run_stages(problem, [SolverStage("geostatic", "geostatic"),
+                               *load_then_consolidate(times[-1])], ts,
+                     on_milestone=functools.partial(_water_table_record, col, times, rows),
+                     geostatic_tol=1e-9)
+    err = max(max(r["err_p"], r["err_s"], r["p_dry_kPa"] / col.p0) for r in rows) \
+        if len(rows) == len(TERZAGHI_T_V) else math.inf
+    tol = 0.01
+    return CaseResult(
+        "terzaghi-water-table", err, tol, bool(err <= tol), time.perf_counter() - t0,
+        problem.num_dofs, log.newton_total, len(log.steps),
+        reference="Terzaghi (1925) series below the water table, drained there; Verruijt"
+                  " (2016) ch. 2; the dry soil's oedometric compression",
+        details={"pair": pair, "nz": nz, "rows": rows, "geostatic_max_u_m": log.geostatic_max_u,
+                 "c_v_m2_per_day": col.cv, "p0_kPa": col.p0, "ranks": comm.size})
 
 
 # ---------------------------------------------------------------------------- Mandel

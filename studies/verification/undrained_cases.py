@@ -38,7 +38,7 @@ from mpi4py import MPI
 from pilegroup.errors import ScenarioError
 from pilegroup.model import Scenario, scenario_from_dict
 from pilegroup.model.loader import build_dataclass, bundled_text
-from pilegroup.model.site import Piles
+from pilegroup.model.piles import Piles
 from pilegroup.model.units import K_WATER
 from pilegroup.studies.run.job import run_scenario
 from pilegroup.studies.verification.common import world

@@ -35,32 +35,35 @@ def test_pier667_default_dimensions():
     assert s.layer_of_depth(-63.5) == 9  # the toe lies in layer 9
 
 
-@pytest.mark.parametrize("build, key", [
-    (lambda: BlockSpec(-1.0, 1.0, 1.0), "block.size_x"),
-    (lambda: PileSpec(0.0, 0.0, 0.0, 1.0), "pile.diameter"),
-    (lambda: CapSpec(1.0, 0.0, 0.0, 1.0, 1.0), "cap.x_max"),
-    (lambda: MeshSizing(n_circ_min=30), "sizing.n_circ_min"),
-    (lambda: MeshSizing(growth=1.0), "sizing.growth"),
-    (lambda: MeshSizing(h_pile=2.0, h_far=1.0), "sizing.h_far"),
+@pytest.mark.parametrize("build, key, entry", [
+    (lambda: BlockSpec(-1.0, 1.0, 1.0), "block.size_x", ""),
+    (lambda: PileSpec(0.0, 0.0, 0.0, 1.0), "pile.diameter", ""),
+    (lambda: CapSpec(1.0, 0.0, 0.0, 1.0, 1.0), "cap.x_max", ""),
+    (lambda: MeshSizing(n_circ_min=30), "sizing.n_circ_min", ""),
+    (lambda: MeshSizing(growth=1.0), "sizing.growth", ""),
+    (lambda: MeshSizing(h_pile=2.0, h_far=1.0), "sizing.h_far", ""),
     (lambda: GeometrySpec(BlockSpec(10, 10, 10), (LayerSpec("a", 4.0), LayerSpec("b", 4.0)),
-                          (PileSpec(0, 0, 1, 5),)), "layers[1].thickness"),
+                          (PileSpec(0, 0, 1, 5),)), "layers[1].thickness", "layer 2"),
     (lambda: GeometrySpec(BlockSpec(10, 10, 10), (LayerSpec("a", None), LayerSpec("b", None)),
-                          (PileSpec(0, 0, 1, 5),)), "layers[0].thickness"),
+                          (PileSpec(0, 0, 1, 5),)), "layers[0].thickness", "layer 1"),
     (lambda: GeometrySpec(BlockSpec(10, 10, 10), (LayerSpec("a", None),),
-                          (PileSpec(0, 0, 1, 10),)), "piles[0].length_in_soil"),
+                          (PileSpec(0, 0, 1, 10),)), "piles[0].length_in_soil", "pile 1"),
     (lambda: GeometrySpec(BlockSpec(10, 10, 10), (LayerSpec("a", None),),
-                          (PileSpec(0, 0, 1, 5, 0.5),)), "piles[0].embedment"),
+                          (PileSpec(0, 0, 1, 5, 0.5),)), "piles[0].embedment", "pile 1"),
     (lambda: GeometrySpec(BlockSpec(10, 10, 10), (LayerSpec("a", None),),
-                          (PileSpec(0, 0, 1, 5), PileSpec(0.8, 0, 1, 5))), "piles[1]"),
+                          (PileSpec(0, 0, 1, 5), PileSpec(0.8, 0, 1, 5))), "piles[1]", "pile 2"),
     (lambda: GeometrySpec(BlockSpec(10, 10, 10), (LayerSpec("a", None),),
                           (PileSpec(0, 0, 1, 5, 0.5),), CapSpec(-0.4, 2, -2, 2, 1.0)),
-     "piles[0]"),
+     "piles[0]", "pile 1"),
 ])
-def test_validation_names_the_field(build, key):
+def test_validation_names_the_field(build, key, entry):
+    """The message starts with the key path (0-based, as --set takes it) and, for an entry of
+    a list of layers or piles, that entry counted from 1."""
     with pytest.raises(ScenarioError) as e:
         build()
     assert e.value.key == key
-    assert str(e.value).startswith(key + " = ")
+    head = f"{key} ({entry}) = " if entry else f"{key} = "
+    assert str(e.value).startswith(head)
 
 
 def test_spec_is_hashable_data_and_key_tracks_h():

@@ -172,9 +172,9 @@ def test_validated_mutations_mesh_or_exit_2(small_pile, tmp_path, monkeypatch, c
             assert cells <= estimated_cells(load_scenario(small_pile, over)), (cells, over)
 
 
-#: Scenarios that validate but that the mesher cannot build: (scenario, overrides, key named).
+#: Scenarios the mesher cannot build, refused before meshing: (scenario, overrides, key named).
 UNMESHABLE = [
-    ("pier667", {"piles.spacing_m": [1.1, 2.5]}, "piles[1] position"),  # 0.05 m to cell edge
+    ("pier667", {"piles.spacing_m": [1.1, 2.5]}, "piles.grid"),  # 0.05 m to cell edge
 ]
 
 
@@ -216,7 +216,7 @@ def test_reproductions_exit_2_naming_the_key(setting, tmp_path, monkeypatch, cap
 def test_pile_near_the_cap_edge_does_not_validate():
     with pytest.raises(ScenarioError, match="0.05 m to the cap edge") as info:
         load_scenario("pier667", {"cap.size_x_m": 8.1})
-    assert info.value.key == "piles[1] position"
+    assert info.value.key == "piles.grid" and "pile 1 leaves" in str(info.value)
 
 
 def test_cell_count_guard_names_mesh_size():

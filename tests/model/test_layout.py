@@ -14,7 +14,7 @@ from hypothesis import strategies as st
 from pilegroup.geometry.adapter import geometry_spec, resolve_geometry
 from pilegroup.model import ScenarioError, bundled_text, scenario_from_dict
 from pilegroup.model.mesh_estimate import estimated_cells
-from pilegroup.model.site import MAX_PILES
+from pilegroup.model.piles import MAX_PILES
 from pilegroup.studies.cli.commands import EXIT_INPUT, main
 
 SINGLE = bundled_text("single_pile")
@@ -136,7 +136,8 @@ layout = [ { x_m = -2.0, y_m = 0.0, diameter_m = 1.0, length_in_soil_m = 12.0 },
     assert main(["scenario", "validate", str(f)]) == EXIT_INPUT
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and err.startswith("pilegroup: invalid input: ")
-    assert "piles.layout[1].rake_deg = 10.0" in err and "raked piles are not supported" in err
+    assert "piles.layout[1].rake_deg (pile 2) = 10.0" in err
+    assert "raked piles are not supported" in err
 
 
 @pytest.mark.parametrize("key", ["diameter_m", "length_in_soil_m"])
@@ -246,7 +247,7 @@ def test_pile_in_the_cap_uses_its_own_radius():
         {"x_m": -3.5, "y_m": 0.0, "diameter_m": 1.0}, {"x_m": 3.5, "y_m": 0.0,
                                                        "diameter_m": 2.8}]}
     err = _error(d)  # cap half-width 5.05 m: 3.5 + 1.4 leaves 0.15 m < 0.2 x 1.4
-    assert err.key == "piles[2] position" and "0.2 x the radius = 0.28 m" in str(err)
+    assert err.key == "piles.layout[1]" and "0.2 x the radius = 0.28 m" in str(err)
     d["piles"]["layout"][1]["diameter_m"] = 2.0
     assert scenario_from_dict(d).piles.diameters == (1.0, 2.0)
 

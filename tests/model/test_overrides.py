@@ -25,7 +25,8 @@ def test_values_are_read_as_toml_else_as_text(text, value):
 
 @pytest.mark.parametrize("override, match", [
     ({"numerics.mesh.sise_m": 1.0}, r"numerics.mesh.sise_m = 1.0: unknown key"),
-    ({"layers[40].E_MPa": 1.0}, r"layers\[40\].E_MPa = 1.0: layers has 10 entries"),
+    ({"layers[40].E_MPa": 1.0},
+         r"layers\[40\].E_MPa \(layer 41\) = 1.0: layers has 10 entries"),
     ({"numerics.mesh.size_m": -1.0}, r"size_m = -1.0 \(m\)"),
 ])
 def test_bad_overrides_name_the_key(override, match):

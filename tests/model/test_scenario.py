@@ -39,8 +39,8 @@ BROKEN = [
     ("unknown-key", "water_table_depth_m = 0.0", "water_table_depth_m = 0.0\ncolour = 1", 1,
      "site.colour", "unknown key"),
     ("missing-key", "diameter_m = 1.0", "", 1, "piles.diameter_m", "missing key"),
-    ("water-table-below-ground", "water_table_depth_m = 0.0", "water_table_depth_m = 1.0", 1,
-     "site.water_table_depth_m", "only 0 (the water table at the ground surface)"),
+    ("water-table-below-block", "water_table_depth_m = 0.0", "water_table_depth_m = 128.0", 1,
+     "site.water_table_depth_m", "must be in [0, 128) (in the soil block"),
     ("wrong-type", "E_MPa = 6.8", 'E_MPa = "soft"', 1, "layers[0].E_MPa", "must be a number"),
     ("wrong-type-int", "grid = [3, 3]", "grid = [3.0, 3]", 1, "piles.grid[0]", "integer"),
     ("thickness-nonpositive", "thickness_m = 19.3", "thickness_m = -1.0", 1,
@@ -55,7 +55,7 @@ BROKEN = [
     ("pile-longer-than-block", "length_in_soil_m = 63.5", "length_in_soil_m = 130.0", 1,
      "piles.length_in_soil_m", "longer than the block"),
     ("pile-outside-cap", "spacing_m = [3.5, 2.5]", "spacing_m = [4.8, 2.5]", 1,
-     "piles[1] position", "outside the cap"),
+     "piles.grid", "pile 1 (diameter 1 m) lies outside the cap"),
     ("piles-overlap", "spacing_m = [3.5, 2.5]", "spacing_m = [0.8, 2.5]", 1,
      "piles.spacing_m", "overlap"),
     ("stack-short-of-toe", ("# thickness_m omitted: layer 10 extends to the bottom of the block",
@@ -216,7 +216,7 @@ def test_console_script_has_no_traceback(tmp_path):
                        capture_output=True, text=True, timeout=120)
     assert r.returncode == 2
     assert "Traceback" not in r.stderr
-    assert "layers[1].nu = 0.7 (-): must be in (0, 0.5)" in r.stderr
+    assert "layers[1].nu (layer 2) = 0.7 (-): must be in (0, 0.5)" in r.stderr
 
 
 def test_missing_file_and_bad_toml(tmp_path, capsys):

@@ -16,12 +16,14 @@ ROOT = Path(__file__).resolve().parents[2]
 
 
 def test_cases_are_registered_in_run_order():
-    assert list(ver.CASES) == ["terzaghi", "mandel", "triaxial", "shaft-capacity",
+    assert list(ver.CASES) == ["terzaghi", "terzaghi-water-table", "mandel", "triaxial",
+                               "shaft-capacity",
                                "interface-patch", "tied-limit", "consolidation-surcharge",
                                "downdrag-end-bearing", "downdrag-floating",
                                "radial-consolidation", "lateral-single-pile",
                                "cap-equilibrium", "rigid-cap-moment", "pile-capacity",
-                               "undrained-loading"]
+                               "undrained-loading", "mcc-undrained-triaxial",
+                               "mcc-compression-line", "ssc-creep", "ssc-oedometer"]
 
 
 def test_registry_passes_only_accepted_overrides(monkeypatch):

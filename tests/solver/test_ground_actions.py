@@ -7,11 +7,13 @@ consolidation (Terzaghi 1925; the oedometric modulus ``m``): a consolidating lay
 ``gamma_w d H / m``.
 """
 
+import dataclasses
+
 import numpy as np
 import pytest
 
 from pilegroup.constitutive.soil import LinearElastic
-from pilegroup.errors import SolverInputError
+from pilegroup.errors import ScenarioError, SolverInputError
 from pilegroup.geometry import groups
 from pilegroup.geometry.box import build_box, graded_levels
 from pilegroup.solver import (
@@ -191,9 +193,19 @@ def test_pile_with_installation_pore_pressure_starts_in_equilibrium(small_pile_s
 
 def test_installation_beyond_the_horizontal_effective_stress_is_refused(small_pile_source,
                                                                         tmp_path):
-    with pytest.raises(SolverInputError, match=r"piles\.installation\.excess_pore_pressure_"
-                                               r"ratio = 0\.9: .* allowed: < 1"):
+    """Refused when the scenario is built, in one line naming the key (before any mesh), and by
+    the solver's own check at the pressure nodes, which the scenario's rule anticipates."""
+    with pytest.raises(ScenarioError, match=r"^piles\.installation\.excess_pore_pressure_ratio"
+                                            r" = 0\.9 \(-\): the installation pore pressure"
+                                            r" reaches 1\.02 times .* must stay below it") as e:
         _installed_pile(small_pile_source, tmp_path, 0.9)
+    assert "\n" not in str(e.value)
+    _, pb = _installed_pile(small_pile_source, tmp_path, 0.2)
+    pb.column.installation = dataclasses.replace(pb.column.installation, ratio=0.9)
+    with pytest.raises(SolverInputError, match=r"piles\.installation\.excess_pore_pressure_"
+                                               r"ratio = 0\.9: .* reaches 1\.02 times .*"
+                                               r" allowed: < 1"):
+        pb.column.check_installation(pb.layout.Q.tabulate_dof_coordinates(), pb.comm)
 
 
 def test_horizontal_conductivity_leaves_vertical_consolidation_alone():
