@@ -22,7 +22,7 @@ on, a residual within ``alt_factor`` times the tolerance is accepted (``StepInfo
 A law with a kink (an interface point at its yield) makes Newton chatter a few times above the
 tolerance without converging, and where in that band an iteration lands differs from machine to
 machine; measured on Pier 667 at h = 0.1 m: 5.9e6, 860, 523, 746, 22.9, 41.7, 22.6, 22.8, 3.55,
-28, 26.8, 3.48, 57.5, 3.56, 28.5, 3.44 times the tolerance, and the step cut.
+28, 26.8, 3.48, 57.5, 3.56, 28.5, 3.44 times the tolerance, and the step cut (docs/solver.md).
 
 Inexact Newton: each correction's linear solve may stop once every block's linear residual is
 below ``krylov_forcing`` times that block's tolerance (``NewtonOptions.krylov_forcing``).
