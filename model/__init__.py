@@ -18,6 +18,7 @@ from pilegroup.model.analysis import (
 )
 from pilegroup.model.loader import BUNDLED, bundled_text, load_scenario, scenario_from_dict
 from pilegroup.model.piles import Installation, LayoutPile, Piles
+from pilegroup.model.reference import Reference
 from pilegroup.model.scenario import Scenario
 from pilegroup.model.site import Cap, InterfaceParams, Layer, Site, Structure
 from pilegroup.model.stages import Stage
@@ -26,6 +27,7 @@ __all__ = [
     "BUNDLED", "Cap", "ConvergenceError", "Installation", "InterfaceOptions", "InterfaceParams",
     "Layer",
     "LayoutPile", "LinearSolver", "MeshOptions", "Numerics", "Outputs", "PilegroupError", "Piles",
-    "Scenario", "ScenarioError", "Site", "Soil", "Stage", "Structure", "Time", "TimeStepping",
+    "Reference", "Scenario", "ScenarioError", "Site", "Soil", "Stage", "Structure", "Time",
+    "TimeStepping",
     "bundled_text", "load_scenario", "scenario_from_dict",
 ]

@@ -21,6 +21,7 @@ from pilegroup.model.law_rules import check_all as check_law_inputs
 from pilegroup.model.mesh_defaults import describe, locking_warning, resolve_numerics
 from pilegroup.model.mesh_estimate import MAX_CELLS, estimated_cells
 from pilegroup.model.piles import Piles
+from pilegroup.model.reference import Reference, check_reference
 from pilegroup.model.site import Cap, Layer, Site, Structure
 from pilegroup.model.soil_models import layer_model
 from pilegroup.model.stages import ACTION_KEYS, Stage
@@ -44,6 +45,7 @@ class Scenario:
     numerics: Numerics = field(default_factory=Numerics)
     outputs: Outputs = field(default_factory=Outputs)
     actions: Actions = field(default_factory=Actions)
+    reference: Reference | None = None
     description: str = ""
     """What the scenario is, in words."""
 
@@ -59,6 +61,7 @@ class Scenario:
         self._check_interfaces()
         check_law_inputs(self)
         self._check_gauges()
+        check_reference(self.reference, len(self.layers), len(self.outputs.gauge_depths_m))
         self._check_numerics()
         self._check_actions()
 

@@ -17,6 +17,12 @@ import os as _os
 # thread count made no difference there (docs/solver.md, "BLAS threads").
 _os.environ.setdefault("OMP_NUM_THREADS", "1")
 
+# Without a display, VTK's figures are drawn with EGL (or OSMesa) from the start instead of after
+# a failed X try that prints a warning nobody can act on (pilegroup.offscreen).
+from pilegroup.offscreen import choose_offscreen_window as _choose_offscreen_window  # noqa: E402
+
+_choose_offscreen_window()
+
 # The PyPI wheel of DOLFINx (dolfinx-solver-real) must be imported before dolfinx/petsc4py:
 # it orders mpi4py ahead of the compiled bindings. This is the only place that does it, and
 # every pilegroup module is imported after this one. The Debian route has no such module.

@@ -5,7 +5,8 @@ docs/examples/pier667_readings.toml): the cap settlement and the soft layers' ce
 friction at 1, 89 and 317 days, and whether the paper's findings hold (Section 2):
 
 1. shaft friction grows with time in the soft layers (:func:`~pilegroup.studies.report.run_report.
-   friction_change`: end of loading against the last output time, layers 1-3);
+   friction_change`: end of loading against the last output time, the soft layers of the
+   scenario's ``[reference]``, layers 1-3 of pier667);
 2. relative displacement grows fastest in the first 89 days
    (:func:`~pilegroup.studies.report.run_report.relative_rates`, every layer of the centre pile);
 3. friction increases with depth to about 30 m, then decreases: the layer with the largest
@@ -22,8 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from pilegroup.studies.report.paper_values import SOFT_LAYERS
-from pilegroup.studies.report.run_report import friction_change, relative_rates
+from pilegroup.studies.report.run_report import friction_change, relative_rates, soft_layers
 from pilegroup.studies.results.rundata import RunData, layer_series, load_run, zero_note
 
 #: Depth (m) where the paper's measured friction stops growing with depth (Section 2: "from
@@ -65,13 +65,13 @@ def case_row(run: RunData, times: tuple[float, ...] = TIMES) -> list[str]:
     w = [1000 * _at(s["t_day"], s["settlement_m"], tq) for tq in times] if s is not None \
         else [float("nan")] * len(times)
     series = layer_series(run, "shaft_friction_kPa")
-    fr = ["/".join(f"{_at(*series[j], tq):.2f}" if j in series else "-" for j in SOFT_LAYERS)
-          for tq in times]
+    fr = ["/".join(f"{_at(*series[j], tq):.2f}" if j in series else "-"
+                   for j in soft_layers(run)) or "-" for tq in times]
     rates = {} if zero_note(run) else {j: r[5] for j, r in relative_rates(run).items()}
     peak = friction_peak(run)
     third = "n/a" if peak is None else ("yes" if peak[1] else "no") + f" (peak in layer {peak[0]})"
     return [*(f"{x:.2f}" for x in w), *fr,
-            _verdict({j: c[2] for j, c in friction_change(run).items()}),
+            _verdict({j: c[2] for j, c in friction_change(run, soft_layers(run)).items()}),
             _verdict(rates), third]
 
 

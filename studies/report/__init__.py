@@ -1,1 +1,1 @@
-"""Figures and Markdown of one run folder: plots, the 3D view, the paper's reported values."""
+"""Figures and Markdown of one run folder: plots, the 3D view, a scenario's published values."""

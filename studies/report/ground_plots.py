@@ -1,8 +1,10 @@
 """Figures of ground that moves: the unified method's two diagrams and the surface trough.
 
 ``unified_method.png`` (Fellenius' unified method, at the last output time): left, the axial
-force of every pile against depth with its neutral plane; right, the settlement against depth
-of every pile (solid), of the soil beside it (dashed) and of the free field (black).
+force of the piles against depth with their neutral planes; right, the settlement against depth
+of the piles (solid), of the soil beside them (dashed) and of the free field (black); every
+pile of a small group, the key piles of a large one
+(:func:`~pilegroup.studies.report.figure_parts.drawn_piles`), down to below the deepest toe.
 ``surface_trough.png``: the ground surface's settlement across the block through the group's
 centre at every output time. Tables: :mod:`pilegroup.studies.results.tables`.
 """
@@ -13,25 +15,27 @@ import numpy as np
 from matplotlib import colormaps
 from matplotlib.figure import Figure
 
+from pilegroup.studies.report.figure_parts import depth_axis, drawn_piles
 from pilegroup.studies.results.rundata import RunData, select
 
 
 def plot_unified_method(run: RunData) -> Figure:
-    """Axial force and settlement against depth of every pile, last output time."""
+    """Axial force and settlement against depth of the piles drawn, last output time."""
     sp = run.settlement_profiles
     assert sp is not None
     t = float(sp["t_day"].max())
     last = select(sp, sp["t_day"] == t)
-    piles = [int(i) for i in np.unique(last["pile"]) if i > 0]
+    drawn = drawn_piles(run, [int(i) for i in np.unique(last["pile"]) if i > 0])
+    piles = [i for i, _ in drawn]
     fig = Figure(figsize=(11.0, 7.0))
     ax_n, ax_s = fig.subplots(1, 2, sharey=True)
     cmap = colormaps["tab10"]
-    for k, i in enumerate(piles):
+    for k, (i, name) in enumerate(drawn):
         m = last["pile"] == i
         z = last["depth_m"][m]
         c = cmap(k % 10)
-        ax_n.plot(last["axial_force_kN"][m], z, color=c, label=f"pile {i}")
-        ax_s.plot(1000 * last["pile_settlement_m"][m], z, color=c, label=f"pile {i}")
+        ax_n.plot(last["axial_force_kN"][m], z, color=c, label=name)
+        ax_s.plot(1000 * last["pile_settlement_m"][m], z, color=c, label=name)
         ax_s.plot(1000 * last["soil_settlement_m"][m], z, color=c, ls="--", lw=0.8)
     if run.neutral is not None:
         nl = select(run.neutral, run.neutral["t_day"] == float(run.neutral["t_day"].max()))
@@ -44,9 +48,8 @@ def plot_unified_method(run: RunData) -> Figure:
     if free.any():
         ax_s.plot(1000 * last["soil_settlement_m"][free], last["depth_m"][free], color="k",
                   lw=2.0, label="free field")
-    ax_n.invert_yaxis()
+    depth_axis(ax_n, run, float(np.max(last["depth_m"][last["pile"] > 0], initial=0.0)))
     ax_n.set_xlabel("axial force (kN, compression +); dots: neutral plane")
-    ax_n.set_ylabel("depth below ground surface (m)")
     ax_s.set_xlabel("settlement (mm, down +); dashed: soil beside the pile")
     ax_n.set_title(f"Axial force, t = {t:g} d")
     ax_s.set_title(f"Settlement, t = {t:g} d")
@@ -79,7 +82,7 @@ def plot_surface_trough(run: RunData) -> Figure:
 
 #: (file, caption, tables needed, function) of each figure.
 GROUND_FIGURES = (
-    ("unified_method.png", "Axial force and settlement against depth of every pile and the free"
+    ("unified_method.png", "Axial force and settlement against depth of the piles and the free"
      " field, with the neutral planes (Fellenius' unified method)", "settlement_profiles",
      plot_unified_method),
     ("surface_trough.png", "Ground surface settlement across the group against time", "trough",

@@ -1,7 +1,8 @@
 """Figures of a run with cap actions: pile bending and the cap's motion.
 
 ``pile_bending.png`` (at the last output time): the lateral deflection and the bending moment of
-every pile against depth, along x and along y. ``cap_motion.png``: the cap's displacements and
+the piles against depth, along x and along y (every pile of a small group, the key piles of a
+large one), down to below the deepest toe. ``cap_motion.png``: the cap's displacements and
 rotations at the action point against time. Conventions: :mod:`pilegroup.studies.run.section_probe`.
 """
 
@@ -11,11 +12,12 @@ import numpy as np
 from matplotlib import colormaps
 from matplotlib.figure import Figure
 
+from pilegroup.studies.report.figure_parts import depth_axis, drawn_piles
 from pilegroup.studies.results.rundata import RunData, select
 
 
 def plot_pile_bending(run: RunData) -> Figure:
-    """Deflection (mm) and bending moment (kN m) of every pile against depth, last time."""
+    """Deflection (mm) and bending moment (kN m) of the piles drawn against depth, last time."""
     b = run.bending
     assert b is not None
     t = float(b["t_day"].max())
@@ -23,21 +25,19 @@ def plot_pile_bending(run: RunData) -> Figure:
     fig = Figure(figsize=(13.0, 7.0))
     axes = fig.subplots(1, 4, sharey=True)
     cmap = colormaps["tab10"]
-    piles = [int(i) for i in np.unique(last["pile"])]
-    for k, i in enumerate(piles):
+    for k, (i, name) in enumerate(drawn_piles(run, [int(i) for i in np.unique(last["pile"])])):
         m = last["pile"] == i
         order = np.argsort(last["depth_m"][m])
         z = last["depth_m"][m][order]
         for ax, col, scale in zip(axes, ("ux_m", "uy_m", "My_kNm", "Mx_kNm"),
                                   (1000.0, 1000.0, 1.0, 1.0), strict=True):
-            ax.plot(scale * last[col][m][order], z, color=cmap(k % 10), label=f"pile {i}")
+            ax.plot(scale * last[col][m][order], z, color=cmap(k % 10), label=name)
     for ax, label in zip(axes, ("deflection ux (mm)", "deflection uy (mm)",
                                 "moment My (kN m)", "moment Mx (kN m)"), strict=True):
         ax.axvline(0.0, color="0.5", lw=0.6)
         ax.set_xlabel(label)
         ax.grid(alpha=0.3)
-    axes[0].invert_yaxis()
-    axes[0].set_ylabel("depth below ground surface (m)")
+    depth_axis(axes[0], run, float(np.max(last["depth_m"])))
     axes[-1].legend(fontsize="small", loc="center left", bbox_to_anchor=(1.0, 0.5))
     fig.suptitle(f"Pile deflection and bending moment at t = {t:g} d")
     return fig
@@ -66,7 +66,7 @@ def plot_cap_motion(run: RunData) -> Figure:
 
 #: file name, caption, the RunData table it needs, plotting function.
 LATERAL_FIGURES = (
-    ("pile_bending.png", "Lateral deflection and bending moment of every pile against depth",
+    ("pile_bending.png", "Lateral deflection and bending moment of the piles against depth",
      "bending", plot_pile_bending),
     ("cap_motion.png", "Cap displacements and rotations against time", "cap_motion",
      plot_cap_motion),

@@ -1,7 +1,10 @@
 """The PNG figures of a run (:class:`~pilegroup.studies.results.rundata.RunData`), one per data set.
 
 Every figure function takes a run and returns a matplotlib ``Figure`` (no pyplot, no display);
-:data:`FIGURES` lists them with their file names, captions and the tables they need.
+:data:`FIGURES` lists them with their file names, captions and the tables they need. Figures
+speak of the scenario: piles named by their place, layers by their names, depth axes to below
+the deepest toe (:mod:`pilegroup.studies.report.figure_parts`); a published value is drawn
+only from the scenario's ``[reference]`` (:attr:`RunData.reference`).
 """
 
 from __future__ import annotations
@@ -11,83 +14,104 @@ from pathlib import Path
 
 import numpy as np
 from matplotlib import colormaps
+from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from pilegroup.fileio import atomic_path
+from pilegroup.studies.report.figure_parts import depth_axis, legend_name
 from pilegroup.studies.report.gauge_plots import GAUGE_FIGURES
 from pilegroup.studies.report.ground_plots import GROUND_FIGURES
 from pilegroup.studies.report.lateral_plots import LATERAL_FIGURES
-from pilegroup.studies.report.paper_values import (
-    EARLY_DAY,
-    PAPER_MESH_M,
-    PAPER_SETTLEMENT_CM,
-    SOFT_LAYERS,
-)
 from pilegroup.studies.results.rundata import (
     RunData,
     layer_label,
     layer_series,
-    pile_loads_last,
+    select,
     zero_note,
 )
 
 
 def _profile_figure(run: RunData, column: str, scale: float, xlabel: str, title: str) -> Figure:
-    assert run.profiles is not None
-    p = run.profiles
-    fig = Figure(figsize=(6.0, 7.0))
-    ax = fig.subplots()
+    """``column`` against depth, one panel per key pile, one curve per output time."""
+    p = run.all_profiles if run.all_profiles is not None else run.profiles
+    assert p is not None
+    keys = [(pile, why) for pile, why in run.key_piles() if np.any(p["pile"] == pile.number)]
+    if not keys:
+        keys = [(run.pile(int(i)), "") for i in np.unique(p["pile"])[:1]]
+    fig = Figure(figsize=(1.0 + 3.6 * len(keys), 7.0))
+    axes = np.atleast_1d(fig.subplots(1, len(keys), sharey=True, squeeze=False)[0])
     times = np.unique(p["t_day"])
-    colors = [(0.1 + 0.8 * k / max(len(times) - 1, 1)) for k in range(len(times))]
-    for t, c in zip(times, colors, strict=True):
-        m = p["t_day"] == t
-        order = np.argsort(p["depth_m"][m])
-        ax.plot(scale * p[column][m][order], p["depth_m"][m][order], marker=".",
-                color=colormaps["viridis"](c), label=f"t = {t:g} d")
-    if run.history is not None:
-        for d in np.unique(run.history["depth_bottom_m"]):
-            ax.axhline(d, color="0.8", lw=0.6, zorder=0)
-    ax.axvline(0.0, color="0.5", lw=0.6)
-    ax.invert_yaxis()
-    ax.set_xlabel(xlabel)
-    ax.set_ylabel("depth below ground surface (m)")
-    ax.set_title(f"{title}, centre pile {run.centre_pile}")
-    ax.legend(fontsize="small")
-    ax.grid(alpha=0.3)
+    for k, (ax, (pile, why)) in enumerate(zip(axes, keys, strict=True)):
+        rows = select(p, p["pile"] == pile.number)
+        for n, t in enumerate(times):
+            m = rows["t_day"] == t
+            order = np.argsort(rows["depth_m"][m])
+            ax.plot(scale * rows[column][m][order], rows["depth_m"][m][order], marker=".",
+                    color=colormaps["viridis"](0.1 + 0.8 * n / max(len(times) - 1, 1)),
+                    label=f"t = {t:g} d")
+        ax.axvline(0.0, color="0.5", lw=0.6)
+        ax.set_xlabel(xlabel)
+        shown = why if why and why != "single" else ""
+        ax.set_title(legend_name(pile) + (f"\n({shown})" if shown else ""), fontsize="medium")
+        ax.grid(alpha=0.3)
+        if k == 0:
+            depth_axis(ax, run, float(np.max(p["depth_m"])))
+    axes[-1].legend(fontsize="small", loc="center left", bbox_to_anchor=(1.0, 0.5))
+    fig.suptitle(title)
     return fig
 
 
 def _time_figure(run: RunData, column: str, scale: float, ylabel: str, title: str) -> Figure:
+    """Layer means of the pile nearest the centre against time.
+
+    With a reference: its soft layers drawn thick, the end of its early period marked.
+    """
     series = layer_series(run, column)
+    ref = run.reference
+    soft = ref.soft_layers if ref is not None else ()
+    early = ref.early_day if ref is not None else None
     fig = Figure(figsize=(8.5, 5.0))
     ax = fig.subplots()
     for j, (t, v) in series.items():
-        ax.plot(t, scale * v, label=layer_label(run, j), lw=2.0 if j in SOFT_LAYERS else 1.0)
+        ax.plot(t, scale * v, label=layer_label(run, j), lw=2.0 if j in soft else 1.0)
     tmax = max((float(t[-1]) for t, _ in series.values()), default=0.0)
-    if tmax > EARLY_DAY:
-        ax.axvline(EARLY_DAY, color="0.5", ls=":", lw=0.8)
-        ax.text(EARLY_DAY, 1.0, f" {EARLY_DAY:g} d", transform=ax.get_xaxis_transform(),
+    if early is not None and tmax > early:
+        ax.axvline(early, color="0.5", ls=":", lw=0.8)
+        ax.text(early, 1.0, f" {early:g} d (reference)", transform=ax.get_xaxis_transform(),
                 va="top", fontsize="small", color="0.4")
     ax.set_xlabel("time (day)")
     ax.set_ylabel(ylabel)
-    ax.set_title(f"{title}, centre pile {run.centre_pile} (thick: soft layers 1-3)")
+    note = (f" (thick: soft layers {', '.join(map(str, soft))} of the reference)"
+            if soft else "")
+    ax.set_title(f"{title}, {run.pile_name(run.centre_pile)}{note}", fontsize="medium")
     ax.legend(fontsize="small", loc="center left", bbox_to_anchor=(1.0, 0.5), title="layer")
     ax.grid(alpha=0.3)
     return fig
 
 
+def _reference_settlement(ax: Axes, run: RunData) -> None:
+    """The reference's published settlement, if the scenario carries one."""
+    ref = run.reference
+    if ref is None or ref.settlement_m is None:
+        return
+    value = 1000.0 * ref.settlement_m
+    when = f"day {ref.settlement_day:g}" if ref.settlement_day is not None else "no time stated"
+    label = f"reference: {value:g} mm ({when})"
+    if ref.settlement_day is None:
+        ax.axhline(value, color="C3", ls="--", lw=1.0, label=label)
+    else:
+        ax.plot([ref.settlement_day], [value], "s", color="C3", label=label)
+
+
 def plot_settlement(run: RunData) -> Figure:
-    """Cap settlement (mm, down) against time, with the paper's ABAQUS value (Table 2)."""
+    """Cap settlement (mm, down) against time; the reference's settlement where there is one."""
     assert run.settlement is not None
     s = run.settlement
     fig = Figure(figsize=(7.0, 4.5))
     ax = fig.subplots()
     order = np.argsort(s["t_day"], kind="stable")
     ax.plot(s["t_day"][order], 1000 * s["settlement_m"][order], marker="o", label="this run")
-    ref = 10 * PAPER_SETTLEMENT_CM[PAPER_MESH_M]
-    ax.axhline(ref, color="C3", ls="--", lw=1.0,
-               label=f"paper, ABAQUS, Table 2 ({PAPER_MESH_M:g} m mesh): "
-                     f"{PAPER_SETTLEMENT_CM[PAPER_MESH_M]:g} cm (time not stated)")
+    _reference_settlement(ax, run)
     ax.set_ylim(bottom=min(0.0, 1000 * float(s["settlement_m"].min())))
     ax.invert_yaxis()
     ax.set_xlabel("time (day)")
@@ -100,57 +124,67 @@ def plot_settlement(run: RunData) -> Figure:
 
 
 def plot_friction_profiles(run: RunData) -> Figure:
-    """Centre-pile shaft friction (kPa) against depth, one curve per output time (Figure 4)."""
+    """Shaft friction (kPa) of the key piles against depth, one curve per output time."""
     return _profile_figure(run, "shaft_friction_kPa", 1.0,
                            "shaft friction (kPa, + = soil supports the pile)", "Shaft friction")
 
 
 def plot_friction_time(run: RunData) -> Figure:
-    """Layer-mean shaft friction (kPa) against time, one curve per layer (Figure 5)."""
+    """Layer-mean shaft friction (kPa) against time, one curve per layer."""
     return _time_figure(run, "shaft_friction_kPa", 1.0, "layer-mean shaft friction (kPa)",
                         "Shaft friction")
 
 
 def plot_relative_displacement_profiles(run: RunData) -> Figure:
-    """Centre-pile relative displacement (mm) against depth per output time (Figure 6)."""
+    """Relative displacement (mm) of the key piles against depth per output time."""
     return _profile_figure(run, "relative_displacement_m", 1000.0,
                            "pile-soil relative displacement (mm, + = pile moves down)",
                            "Relative displacement" + zero_note(run))
 
 
 def plot_relative_displacement_time(run: RunData) -> Figure:
-    """Layer-mean relative displacement (mm) against time, one curve per layer (Figure 7)."""
+    """Layer-mean relative displacement (mm) against time, one curve per layer."""
     return _time_figure(run, "relative_displacement_m", 1000.0,
                         "layer-mean relative displacement (mm)",
                         "Relative displacement" + zero_note(run))
 
 
 def plot_axial_force_profiles(run: RunData) -> Figure:
-    """Centre-pile axial force (kN, compression positive) against depth per output time."""
+    """Axial force (kN, compression positive) of the key piles against depth per output time."""
     return _profile_figure(run, "axial_force_kN", 1.0, "axial force (kN, compression +)",
                            "Axial force")
 
 
 def plot_pile_loads(run: RunData) -> Figure:
     """Plan view of the head force of each pile at the last output time (kN and % of total)."""
-    last = pile_loads_last(run)
+    last = run.head_forces()
     assert last is not None
-    t, rows = last
-    f = rows["head_force_kN"]
+    t, forces, source = last
+    piles = sorted(forces)
+    f = np.array([forces[i] for i in piles])
+    xy = np.array([(run.pile(i).x, run.pile(i).y) for i in piles])
+    if not np.all(np.isfinite(xy)):
+        table = run.heads if run.heads is not None else run.loads
+        assert table is not None
+        rows = select(table, table["t_day"] == t)
+        at = {int(i): (x, y) for i, x, y in zip(rows["pile"], rows["x_m"], rows["y_m"],
+                                                strict=True)}
+        xy = np.array([at[i] for i in piles])
     total = float(f.sum())
     fig = Figure(figsize=(7.0, 6.0))
     ax = fig.subplots()
     size = 3000.0 * np.abs(f) / max(float(np.abs(f).max()), 1e-30)
-    ax.scatter(rows["x_m"], rows["y_m"], s=size, alpha=0.4, color="C0", edgecolor="k")
-    for x, y, i, fi in zip(rows["x_m"], rows["y_m"], rows["pile"], f, strict=True):
+    ax.scatter(xy[:, 0], xy[:, 1], s=size, alpha=0.4, color="C0", edgecolor="k")
+    for (x, y), i, fi in zip(xy, piles, f, strict=True):
         share = f"{100 * fi / total:.1f} %" if total else "-"
-        ax.annotate(f"pile {int(i)}\n{fi:.0f} kN\n{share}", (x, y), ha="center", va="center",
-                    fontsize="small")
+        ax.annotate(f"{legend_name(run.pile(i))}\n{fi:.0f} kN\n{share}", (x, y), ha="center",
+                    va="center", fontsize="small")
     ax.set_aspect("equal")
     ax.margins(0.25)
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
-    ax.set_title(f"Pile head forces at t = {t:g} d (total {total:.0f} kN of the listed piles)")
+    ax.set_title(f"Pile head forces at t = {t:g} d, total {total:.0f} kN\n"
+                 f"({source.replace('`', '')})", fontsize="medium")
     ax.grid(alpha=0.3)
     return fig
 
@@ -211,19 +245,20 @@ def plot_capacity(run: RunData) -> Figure:
 #: Every figure: file name, caption, the RunData table it needs, plotting function.
 FIGURES: tuple[tuple[str, str, str, Callable[[RunData], Figure]], ...] = (
     ("settlement_time.png", "Cap settlement against time", "settlement", plot_settlement),
-    ("friction_profiles.png", "Shaft friction profiles of the centre pile (cf. paper Fig. 4)",
-     "profiles", plot_friction_profiles),
-    ("friction_time.png", "Layer-mean shaft friction against time (cf. paper Fig. 5)",
+    ("friction_profiles.png", "Shaft friction profiles of the key piles", "profiles",
+     plot_friction_profiles),
+    ("friction_time.png", "Layer-mean shaft friction of the pile nearest the centre against time",
      "history|profiles", plot_friction_time),
-    ("relative_displacement_profiles.png",
-     "Relative displacement profiles of the centre pile (cf. paper Fig. 6)", "profiles",
-     plot_relative_displacement_profiles),
+    ("relative_displacement_profiles.png", "Relative displacement profiles of the key piles",
+     "profiles", plot_relative_displacement_profiles),
     ("relative_displacement_time.png",
-     "Layer-mean relative displacement against time (cf. paper Fig. 7)", "history|profiles",
+     "Layer-mean relative displacement of the pile nearest the centre against time",
+     "history|profiles",
      plot_relative_displacement_time),
-    ("axial_force_profiles.png", "Axial force profiles of the centre pile", "profiles",
+    ("axial_force_profiles.png", "Axial force profiles of the key piles", "profiles",
      plot_axial_force_profiles),
-    ("pile_loads.png", "Pile head forces at the last output time", "loads", plot_pile_loads),
+    ("pile_loads.png", "Pile head forces at the last output time", "heads|loads",
+     plot_pile_loads),
     ("load_settlement.png", "Load–settlement curve (every accepted step)", "load_settlement",
      plot_load_settlement),
     ("capacity.png", "Capacity stage: load–settlement curves and the capacity criteria",

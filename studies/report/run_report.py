@@ -15,12 +15,6 @@ from pathlib import Path
 
 import numpy as np
 
-from pilegroup.studies.report.paper_values import (
-    EARLY_DAY,
-    PAPER_MESH_M,
-    PAPER_SETTLEMENT_CM,
-    SOFT_LAYERS,
-)
 from pilegroup.studies.report.plots import FIGURES, save_figure
 from pilegroup.studies.report.view3d import FILE as VIEW3D
 from pilegroup.studies.report.view3d import write_view3d
@@ -29,7 +23,6 @@ from pilegroup.studies.results.rundata import (
     layer_label,
     layer_series,
     load_run,
-    pile_loads_last,
     select,
     zero_note,
 )
@@ -72,26 +65,35 @@ def write_report(out_dir: Path, share: tuple[int, int] = (0, 1)) -> list[Path]:
 
 # ------------------------------------------------------------------------------------- markdown
 
+def _reference_settlement(run: RunData, w_last: float | None) -> list[str]:
+    """The reference's published settlement and the run's last one against it, if any."""
+    ref = run.reference
+    if ref is None or ref.settlement_m is None:
+        return []
+    when = f"at day {ref.settlement_day:g}" if ref.settlement_day is not None else \
+        "no time stated"
+    lines = [f"Reference settlement: **{1000 * ref.settlement_m:g} mm** "
+             f"({when})" + (f"; {ref.settlement_note}" if ref.settlement_note else "") + "."]
+    if w_last is not None:
+        lines[0] += (f" The run's last settlement is {100 * w_last / ref.settlement_m:.0f} % "
+                     "of it.")
+    return lines + [""]
+
+
 def _settlement_section(run: RunData) -> list[str]:
     lines = ["### Cap settlement", ""]
-    paper = ", ".join(f"{v:g} cm ({h:g} m mesh)" for h, v in PAPER_SETTLEMENT_CM.items())
-    ref = (f"The paper reports no measured settlement of the pier. Its settlement values are "
-           f"ABAQUS results, Section 5, Table 2 (mesh-size study): {paper}; it adopts the "
-           f"{PAPER_MESH_M:g} m mesh, i.e. **{PAPER_SETTLEMENT_CM[PAPER_MESH_M]:g} cm**. "
-           f"Table 2 states no time; the simulation runs 317 days (Section 5).")
     s = run.settlement
     if s is None:
-        return lines + ["No `settlement.csv`: no settlement data.", "", ref, ""]
+        return lines + ["No `settlement.csv`: no settlement data.", "",
+                        *_reference_settlement(run, None)]
     lines += ["| t (day) | stage | settlement (mm) |", "| ---: | --- | ---: |"]
     order = np.argsort(s["t_day"], kind="stable")
     for i in order:
         lines.append(f"| {s['t_day'][i]:g} | {s['stage'][i]} | {1000 * s['settlement_m'][i]:.3f} |")
     t_last, w_last = float(s["t_day"][order[-1]]), float(s["settlement_m"][order[-1]])
-    ratio = 100 * (100 * w_last) / PAPER_SETTLEMENT_CM[PAPER_MESH_M]
     lines += ["", f"Settlement at the last output time, t = {t_last:g} day: "
-              f"**{1000 * w_last:.3f} mm** ({100 * w_last:.2f} cm), {ratio:.0f} % of the "
-              f"paper's {PAPER_SETTLEMENT_CM[PAPER_MESH_M]:g} cm.", "", ref, ""]
-    return lines
+              f"**{1000 * w_last:.3f} mm** ({100 * w_last:.2f} cm).", ""]
+    return lines + _reference_settlement(run, w_last)
 
 
 def _verdict(flags: dict[int, bool]) -> str:
@@ -101,14 +103,21 @@ def _verdict(flags: dict[int, bool]) -> str:
     return "no" + (f" (only in layer(s) {', '.join(some)})" if some else "")
 
 
-def friction_change(run: RunData) -> dict[int, tuple[float, float, bool]]:
-    """Soft layers' centre-pile mean friction: (at the end of loading, at the last time, grew).
+def soft_layers(run: RunData) -> tuple[int, ...]:
+    """The layers the scenario's ``[reference]`` calls soft (none without one)."""
+    return run.reference.soft_layers if run.reference is not None else ()
 
+
+def friction_change(run: RunData, layers: tuple[int, ...] | None = None
+                    ) -> dict[int, tuple[float, float, bool]]:
+    """Centre-pile mean friction per layer: (at the end of loading, at the last time, grew).
+
+    ``layers``: those asked about (default: the reference's soft layers, else every layer).
     Friction in kPa; grew: by more than :data:`REL_TOL` of the larger value.
     """
     out: dict[int, tuple[float, float, bool]] = {}
     series = layer_series(run, "shaft_friction_kPa")
-    for j in SOFT_LAYERS:
+    for j in layers if layers is not None else (soft_layers(run) or tuple(series)):
         if j not in series:
             continue
         t, v = series[j]
@@ -121,88 +130,142 @@ def friction_change(run: RunData) -> dict[int, tuple[float, float, bool]]:
 
 
 def _friction_section(run: RunData) -> list[str]:
-    lines = ["### Does shaft friction grow with time in the soft layers?", "",
-             "Soft layers 1-3 of Table 1 (clay, mud, mucky clay); layer-mean shaft friction of "
-             f"the centre pile (pile {run.centre_pile}, + = soil supports the pile) at the end of "
-             "loading against the last output time; growth = an increase above "
-             f"{100 * REL_TOL:g} % of the larger value.", ""]
+    soft = soft_layers(run)
+    pile = run.pile_name(run.centre_pile)
+    if soft:
+        names = ", ".join(run.layer_names.get(j, f"layer {j}") for j in soft)
+        lines = ["### Does shaft friction grow with time in the soft layers?", "",
+                 f"Soft layers {', '.join(map(str, soft))} of the reference ({names}); "
+                 f"layer-mean shaft friction of {pile}"]
+    else:
+        lines = ["### Shaft friction from the end of loading to the last output time", "",
+                 f"Layer-mean shaft friction of {pile}"]
+    lines[-1] += (" (+ = soil supports the pile) at the end of loading against the last "
+                  f"output time; growth = an increase above {100 * REL_TOL:g} % of the larger "
+                  "value.")
+    lines.append("")
     change = friction_change(run)
     if not change:
         why = ("no end of loading (no `settlement.csv` with a load stage)" if run.t_load is None
-               else "no friction data (`layer_history.csv` / `pile_profiles.csv`) for layers "
-                    "1-3 of the centre pile from the end of loading to a later time")
+               else "no friction data (`layer_history.csv` / `pile_profiles.csv`) of the "
+                    "layers from the end of loading to a later time")
         return lines + [f"**Answer: no data** — {why}.", ""]
     t_last = float(layer_series(run, "shaft_friction_kPa")[next(iter(change))][0][-1])
     rows = [f"| {layer_label(run, j)} | {f0:.3f} | {f1:.3f} | {f1 - f0:+.3f} "
             f"| {'yes' if ok else 'no'} |" for j, (f0, f1, ok) in change.items()]
     lines += [f"| layer | f at end of loading, t = {run.t_load:g} d (kPa) "
               f"| f at t = {t_last:g} d (kPa) | change (kPa) | grows |",
-              "| --- | ---: | ---: | ---: | --- |", *rows, "",
-              f"**Answer: {_verdict({j: c[2] for j, c in change.items()})}.**", ""]
-    return lines
+              "| --- | ---: | ---: | ---: | --- |", *rows, ""]
+    if soft:
+        return lines + [f"**Answer: {_verdict({j: c[2] for j, c in change.items()})}.**", ""]
+    grows = [str(j) for j, c in change.items() if c[2]]
+    where = ("every layer" if len(grows) == len(change) else
+             f"layer(s) {', '.join(grows)} of {len(change)}" if grows else "no layer")
+    return lines + [f"**Friction grows in {where}.**", ""]
 
 
 def relative_rates(run: RunData) -> dict[int, tuple[float, float, float, float, float, bool]]:
-    """Per layer of the centre pile: (w0, w89, w_last, rate early, rate late, early faster).
+    """Per layer of the centre pile: (w0, w_early, w_last, rate early, rate late, early faster).
 
-    Relative displacement (m) at the end of loading, at :data:`EARLY_DAY` and at the last time;
-    the two mean rates (m/day); whether the early rate is the larger.
+    Relative displacement (m) at the end of loading, at the reference's ``early_day`` and at
+    the last time; the two mean rates (m/day); whether the early rate is the larger. Empty
+    without a reference early period.
     """
     out: dict[int, tuple[float, float, float, float, float, bool]] = {}
     t0 = run.t_load
+    early = run.reference.early_day if run.reference is not None else None
+    if early is None:
+        return out
     for j, (t, v) in layer_series(run, "relative_displacement_m").items():
-        w0, w89 = _at(t, v, t0), _at(t, v, EARLY_DAY)
+        w0, w_early = _at(t, v, t0), _at(t, v, early)
         t_last = float(t[-1])
-        if w0 is None or w89 is None or t0 is None or t_last <= EARLY_DAY or t0 >= EARLY_DAY:
+        if w0 is None or w_early is None or t0 is None or t_last <= early or t0 >= early:
             continue
         w1 = float(v[-1])
-        r1, r2 = (w89 - w0) / (EARLY_DAY - t0), (w1 - w89) / (t_last - EARLY_DAY)
-        out[j] = (w0, w89, w1, r1, r2, r1 > r2 + REL_TOL * max(abs(r1), abs(r2)))
+        r1, r2 = (w_early - w0) / (early - t0), (w1 - w_early) / (t_last - early)
+        out[j] = (w0, w_early, w1, r1, r2, r1 > r2 + REL_TOL * max(abs(r1), abs(r2)))
     return out
 
 
 def _relative_section(run: RunData) -> list[str]:
-    lines = [f"### Does relative displacement grow fastest in the first {EARLY_DAY:g} days?", "",
-             "Mean growth rate of the layer-mean relative displacement of the centre pile "
-             f"(+ = pile moves down relative to the soil) from the end of loading to "
-             f"{EARLY_DAY:g} days against {EARLY_DAY:g} days to the last time; the paper "
-             "(Section 2) finds the rate from 0 to 89 days \"much larger\" than later.", ""]
+    """Whether the relative displacement grows fastest in the reference's early period."""
+    ref = run.reference
+    if ref is None or ref.early_day is None:
+        return []
+    early = ref.early_day
+    lines = [f"### Does relative displacement grow fastest in the first {early:g} days?", "",
+             f"Mean growth rate of the layer-mean relative displacement of "
+             f"{run.pile_name(run.centre_pile)} (+ = pile moves down relative to the soil) "
+             f"from the end of loading to {early:g} days against {early:g} days to the last "
+             "time; the early period is the reference's.", ""]
     if zero_note(run):
         return lines + ["**Answer: not applicable** — every relative displacement is zero "
                         "(tied pile-soil interface).", ""]
     rates, t0 = relative_rates(run), run.t_load
     if not rates:
         why = ("no end of loading (no `settlement.csv` with a load stage)" if t0 is None
-               else f"no relative displacement data of the centre pile spanning the end of "
-                    f"loading, {EARLY_DAY:g} days and a later time")
+               else f"no relative displacement data of the pile spanning the end of "
+                    f"loading, {early:g} days and a later time")
         return lines + [f"**Answer: no data** — {why}.", ""]
     t_last = float(layer_series(run, "relative_displacement_m")[next(iter(rates))][0][-1])
-    rows = [f"| {layer_label(run, j)} | {1000 * w0:.3f} | {1000 * w89:.3f} "
+    rows = [f"| {layer_label(run, j)} | {1000 * w0:.3f} | {1000 * we:.3f} "
             f"| {1000 * w1:.3f} | {1000 * r1:.5f} | {1000 * r2:.5f} "
-            f"| {'yes' if ok else 'no'} |" for j, (w0, w89, w1, r1, r2, ok) in rates.items()]
-    lines += [f"| layer | w at t = {t0:g} d (mm) | w at {EARLY_DAY:g} d (mm) "
-              f"| w at {t_last:g} d (mm) | rate {t0:g}-{EARLY_DAY:g} d (mm/day) "
-              f"| rate {EARLY_DAY:g}-{t_last:g} d (mm/day) | faster early |",
+            f"| {'yes' if ok else 'no'} |" for j, (w0, we, w1, r1, r2, ok) in rates.items()]
+    lines += [f"| layer | w at t = {t0:g} d (mm) | w at {early:g} d (mm) "
+              f"| w at {t_last:g} d (mm) | rate {t0:g}-{early:g} d (mm/day) "
+              f"| rate {early:g}-{t_last:g} d (mm/day) | faster early |",
               "| --- | ---: | ---: | ---: | ---: | ---: | --- |", *rows, "",
               f"**Answer: {_verdict({j: r[5] for j, r in rates.items()})}.**", ""]
     return lines
 
 
+def applied_vertical_load(scenario: dict) -> float | None:
+    """The vertical load (kN, down) of the scenario's last load stage, from scenario.json."""
+    load = None
+    for st in scenario.get("stages") or []:
+        if not isinstance(st, dict) or st.get("kind") != "load":
+            continue
+        if st.get("cap_load_kN") is not None:
+            load = float(st["cap_load_kN"])
+        elif st.get("Fz_kN") is not None:
+            load = -float(st["Fz_kN"])
+    return load
+
+
 def _loads_section(run: RunData) -> list[str]:
-    last = pile_loads_last(run)
+    last = run.head_forces()
     if last is None:
         return []
-    t, rows = last
-    total = float(rows["head_force_kN"].sum())
+    t, forces, source = last
+    total = sum(forces.values())
     lines = [f"### Pile head forces at t = {t:g} day", "",
-             "| pile | x (m) | y (m) | head force (kN) | share (%) |",
-             "| ---: | ---: | ---: | ---: | ---: |"]
-    for i, x, y, f in zip(rows["pile"], rows["x_m"], rows["y_m"], rows["head_force_kN"],
-                          strict=True):
+             f"Head force: {source}.", "",
+             "| pile | place | x (m) | y (m) | head force (kN) | share (%) |",
+             "| ---: | --- | ---: | ---: | ---: | ---: |"]
+    for i in sorted(forces):
+        p, f = run.pile(i), forces[i]
         share = f"{100 * f / total:.1f}" if total else "-"
-        lines.append(f"| {int(i)} | {x:g} | {y:g} | {f:.1f} | {share} |")
-    return lines + ["", f"Total of the listed piles: {total:.1f} kN (paper, Section 5: "
-                        "total load on the pile foundation 10856 kN).", ""]
+        place = p.place if np.isfinite(p.x) else "-"
+        lines.append(f"| {i} | {place} | {p.x:g} | {p.y:g} | {f:.1f} | {share} |")
+    notes = [f"Total of the piles: {total:.1f} kN"]
+    applied = applied_vertical_load(run.scenario)
+    if applied is not None:
+        notes.append(f"vertical load of the last load stage: {applied:.1f} kN")
+    ref = run.reference
+    if ref is not None and ref.total_load_kN is not None:
+        notes.append(f"reference total load on the foundation: {ref.total_load_kN:g} kN")
+    if run.heads is not None and run.loads is not None:
+        m = run.loads["t_day"] == run.loads["t_day"].max()
+        notes.append(f"the axial forces integrated from the piles' stress at their uppermost "
+                     f"sections (`pile_loads.csv`) total "
+                     f"{float(run.loads['head_force_kN'][m].sum()):.1f} kN (docs/model.md, "
+                     "\"Which head force\")")
+    return lines + ["", "; ".join(notes) + ".", ""]
+
+
+def _upper(text: str) -> str:
+    """``text`` with its first letter a capital."""
+    return text[:1].upper() + text[1:]
 
 
 def _fmt(x: float, spec: str) -> str:
@@ -218,8 +281,9 @@ def _gauges_section(run: RunData) -> list[str]:
     g = select(g, g["time_day"] == t)
     g = select(g, np.argsort(g["section"]))
     lines = [f"### Virtual strain gauges: the field method against the model, t = {t:g} day", "",
-             f"Centre pile {run.centre_pile}, `gauges.csv`. Field method = the paper's Eqs. 1-3 "
-             "on the model's section-mean strains (docs/model.md, \"Virtual strain gauges\"); "
+             f"{_upper(run.pile_name(run.centre_pile))}, `gauges.csv`. Field method = the "
+             "force, friction and relative displacement a field engineer derives from the "
+             "model's section-mean strains (docs/model.md, \"Virtual strain gauges\"); "
              "error = field minus model. Friction: mean over the interval from the section down "
              "to the next one (none below the last section). Relative displacement: the field "
              "method's pile-top settlement minus the pile's shortening, i.e. the pile's "
@@ -249,8 +313,12 @@ def results_markdown(out_dir: Path, figures_rel: str) -> str:
               None: "unknown (no `complete` flag in summary.json)"}[run.complete]
     t_load = "unknown" if run.t_load is None else f"t = {run.t_load:g} day"
     lines = [f"## Results: {name}", "",
-             f"Run folder `{run.out_dir}`; run status: {status}. Centre pile: "
-             f"{run.centre_pile}. End of loading: {t_load}.", ""]
+             f"Run folder `{run.out_dir}`; run status: {status}. Piles: {len(run.piles) or '-'}; "
+             f"layer histories of {run.pile_name(run.centre_pile)}. End of loading: {t_load}.",
+             ""]
+    if run.reference is not None:
+        lines += [f"Published values beside the run's (the scenario's `[reference]`): "
+                  f"{run.reference.source}.", ""]
     lines += _settlement_section(run)
     lines += _friction_section(run)
     lines += _relative_section(run)

@@ -8,6 +8,12 @@ time in a load stage (without scenario.json: a stage whose name contains "load";
 the first output time after 0).
 
 Any file may be missing (its table is ``None``, logged).
+
+From ``scenario.json`` also: the piles, named by their place in the group
+(:mod:`pilegroup.studies.results.pile_roles`) with their lengths (the depth axes end below the
+deepest toe), the layers' depths, and the ``[reference]`` table of published values, if the
+scenario has one (:class:`~pilegroup.model.reference.Reference`): without it nothing of a
+publication is drawn or written.
 """
 
 from __future__ import annotations
@@ -20,12 +26,15 @@ from typing import Any
 
 import numpy as np
 
-from pilegroup.model import ScenarioError
+from pilegroup.model import Piles, Reference, ScenarioError
+from pilegroup.model.loader import build_dataclass
+from pilegroup.studies.results.pile_roles import PileInfo, key_piles, name_piles
 from pilegroup.studies.results.tables import (
     BENDING_CSV,
     CAP_MOTION_CSV,
     CAPACITY_CSV,
     GAUGES_CSV,
+    HEADS_CSV,
     LAYER_HISTORY_CSV,
     LOAD_SETTLEMENT_CSV,
     LOADS_CSV,
@@ -43,7 +52,7 @@ log = logging.getLogger(__name__)
 #: The CSV files a run folder is read from, in this order.
 RUN_FILES = (SETTLEMENT_CSV, PROFILES_CSV, LAYER_HISTORY_CSV, LOADS_CSV, LOAD_SETTLEMENT_CSV,
              GAUGES_CSV, NEUTRAL_PLANE_CSV, SETTLEMENT_PROFILES_CSV, TROUGH_CSV, CAPACITY_CSV,
-             BENDING_CSV, CAP_MOTION_CSV)
+             BENDING_CSV, CAP_MOTION_CSV, HEADS_CSV)
 
 #: Default centre pile of a 3 x 3 group numbered row by row.
 DEFAULT_CENTRE_PILE = 5
@@ -67,7 +76,12 @@ def _read_json(path: Path) -> dict[str, Any]:
 
 @dataclasses.dataclass(frozen=True)
 class RunData:
-    """One run output folder, read and checked; pile tables hold the centre pile only."""
+    """One run output folder, read and checked.
+
+    ``profiles``, ``history`` and ``gauges`` hold the centre pile only (``centre_pile``: the
+    pile nearest the group's plan centre, whose layer means are recorded after every step; it
+    need not stand on the centre); ``all_profiles`` every pile.
+    """
 
     out_dir: Path
     settlement: Table | None
@@ -92,6 +106,19 @@ class RunData:
     """``pile_bending.csv``, every pile; ``None`` when no pile bends (a vertical load only)."""
     cap_motion: Table | None = None
     """``cap_motion.csv``; ``None`` when the cap neither moves sideways nor rotates."""
+    all_profiles: Table | None = None
+    """``pile_profiles.csv``, every pile."""
+    heads: Table | None = None
+    """``pile_heads.csv``, every pile: the cap's action on each pile at its head."""
+    piles: tuple[PileInfo, ...] = ()
+    """Every pile named by its place, with its length (scenario.json; else the positions of
+    ``pile_loads.csv`` without lengths; else none)."""
+    layer_bottoms: tuple[float, ...] = ()
+    """Depth of each layer's bottom (m), top down (scenario.json); the last is the block's."""
+    reference: Reference | None = None
+    """The scenario's published values (its ``[reference]`` table), if it has one."""
+    scenario: dict[str, Any] = dataclasses.field(default_factory=dict)
+    """``scenario.json`` as read (empty without it)."""
 
     @property
     def complete(self) -> bool | None:
@@ -104,6 +131,53 @@ class RunData:
     def has(self, needs: str) -> bool:
         """Whether any of the tables ``needs`` names (``"history|profiles"``) was read."""
         return any(getattr(self, n) is not None for n in needs.split("|"))
+
+    def pile(self, i: int) -> PileInfo:
+        """Pile ``i`` (from 1) named by its place; ``pile i`` alone when the run does not say."""
+        for p in self.piles:
+            if p.number == i:
+                return p
+        return PileInfo(i, float("nan"), float("nan"))
+
+    def pile_name(self, i: int) -> str:
+        """``pile 5 (row 2, column 2, centre)``, or ``pile 5`` when its place is unknown."""
+        p = self.pile(i)
+        return p.name if np.isfinite(p.x) else f"pile {i}"
+
+    @property
+    def deepest_toe(self) -> float | None:
+        """Depth of the deepest pile toe below the ground surface (m), if the run says."""
+        lengths = [p.length for p in self.piles if p.length is not None]
+        return max(lengths) if lengths else None
+
+    def depth_limit(self, deepest_data: float) -> float:
+        """The bottom of a depth axis: 10 % below the deepest toe, else below the data."""
+        toe = self.deepest_toe
+        return 1.1 * (toe if toe is not None else deepest_data)
+
+    def head_forces(self) -> tuple[float, dict[int, float], str] | None:
+        """The head force of every pile at the last output time: ``(t, {pile: kN}, source)``.
+
+        The cap's action on the pile at its head (``pile_heads.csv``'s ``N_kN``) where the run
+        has it, else the axial force at the uppermost section (``pile_loads.csv``); ``source``
+        says which, in words.
+        """
+        for table, column, source in (
+                (self.heads, "N_kN", "the cap's action on the pile at its head, "
+                                     "`pile_heads.csv`"),
+                (self.loads, "head_force_kN", "the axial force at the pile's uppermost section, "
+                                              "`pile_loads.csv`")):
+            if table is not None:
+                t = float(table["t_day"].max())
+                m = table["t_day"] == t
+                return t, {int(i): float(f) for i, f in zip(table["pile"][m], table[column][m],
+                                                            strict=True)}, source
+        return None
+
+    def key_piles(self) -> list[tuple[PileInfo, str]]:
+        """The piles the profile figures show and why (:func:`key_piles`), by head force."""
+        last = self.head_forces()
+        return key_piles(self.piles, last[1] if last else None)
 
 
 def _centre_pile(summary: dict[str, Any], tables: list[Table | None]) -> int:
@@ -184,7 +258,52 @@ def load_run(out_dir: Path) -> RunData:
                    _centre_only(GAUGES_CSV, raw[GAUGES_CSV], centre), raw[NEUTRAL_PLANE_CSV],
                    raw[SETTLEMENT_PROFILES_CSV], raw[TROUGH_CSV], raw[CAPACITY_CSV],
                    _if_lateral(raw[BENDING_CSV], ("Mx_kNm", "My_kNm")),
-                   _if_lateral(raw[CAP_MOTION_CSV], ("ux_m", "uy_m", "rx_rad", "ry_rad")))
+                   _if_lateral(raw[CAP_MOTION_CSV], ("ux_m", "uy_m", "rx_rad", "ry_rad")),
+                   raw[PROFILES_CSV], raw[HEADS_CSV], _piles(scenario, raw),
+                   _layer_bottoms(scenario), _part(Reference, scenario, "reference"), scenario)
+
+
+def _part[T](cls: type[T], scenario: dict[str, Any], key: str) -> T | None:
+    """The scenario part ``key`` of scenario.json as ``cls``; None if absent or unreadable."""
+    data = scenario.get(key)
+    if data is None:
+        return None
+    try:
+        return build_dataclass(cls, data, key)
+    except ScenarioError as exc:
+        log.warning("ignoring %s of scenario.json: %s", key, exc)
+        return None
+
+
+def _piles(scenario: dict[str, Any], raw: dict[str, Table | None]) -> tuple[PileInfo, ...]:
+    """The piles named by place: from scenario.json, else from a table's positions."""
+    piles = _part(Piles, scenario, "piles")
+    if piles is not None:
+        return name_piles(piles.xy, piles.lengths)
+    for name in (HEADS_CSV, LOADS_CSV):
+        t = raw[name]
+        if t is not None:
+            first = t["t_day"] == t["t_day"].min()
+            order = np.argsort(t["pile"][first])
+            return name_piles(np.column_stack([t["x_m"][first][order], t["y_m"][first][order]]))
+    return ()
+
+
+def _layer_bottoms(scenario: dict[str, Any]) -> tuple[float, ...]:
+    """Each layer's bottom depth (m) from scenario.json; the last one's is the block's."""
+    layers = [lay for lay in scenario.get("layers") or [] if isinstance(lay, dict)]
+    depth = (scenario.get("site") or {}).get("depth_m")
+    out, z = [], 0.0
+    for lay in layers:
+        h = lay.get("thickness_m")
+        if h is None:
+            if depth is None:
+                break
+            z = float(depth)
+        else:
+            z += float(h)
+        out.append(z)
+    return tuple(out)
 
 
 def _if_lateral(t: Table | None, columns: tuple[str, ...]) -> Table | None:

@@ -13,8 +13,15 @@ positive down; forces kN; stresses kPa; displacements m.
   shaft_friction_kPa,relative_displacement_m,viscoplastic_slip_m,normal_traction_kPa`` (layer
   means on the shaft of the centre pile, every accepted step);
 * ``interface_layers.csv``: the columns of ``layer_history.csv``, every pile at the output
-  times;
-* ``pile_loads.csv``: ``t_day,pile,x_m,y_m,head_force_kN``;
+  times; a layer's ``depth_bottom_m`` is the pile's toe where the pile ends in it (a layer mean
+  times the pile's perimeter and the layer's thickness is then the layer's shaft force);
+* ``pile_loads.csv``: ``t_day,pile,x_m,y_m,head_force_kN,depth_m``: the axial force in the pile
+  due to the loads at its uppermost section (the top element layer's mid-height, ``depth_m``
+  below the ground surface), from the pile's own stress: the first row of the pile's
+  ``pile_profiles.csv``. ``pile_heads.csv``'s ``N_kN`` is the force at the head itself, the
+  cap's action on the pile, which the applied load balances; the two differ by the shaft
+  friction above the section and by how the section's stress is summed (docs/model.md, "Which
+  head force");
 * ``load_settlement.csv``: ``t_day,stage,load_factor,load_kN,settlement_m`` (every accepted
   step: the load–settlement curve, also of a run that found no equilibrium beyond some load);
 * ``gauges.csv``: ``time_day,pile,section,depth_m,strain,N_kN,f_kPa,w_mm`` (the virtual strain
@@ -119,6 +126,9 @@ COLUMNS: dict[str, tuple[str, ...]] = {
     MAX_MOMENT_CSV: ("t_day", "pile", "M_max_kNm", "depth_m"),
     STIFFNESS_CSV: ("action", "ux_m", "uy_m", "uz_m", "rx_rad", "ry_rad", "rz_rad"),
 }
+#: Columns added to a file after its contract was set: written after :data:`COLUMNS`, read
+#: where present (an older run folder lacks them).
+ADDED: dict[str, tuple[str, ...]] = {LOADS_CSV: ("depth_m",)}
 #: The columns that hold text; all others hold numbers.
 TEXT_COLUMNS = frozenset({"stage", "layer_name", "action"})
 
@@ -126,7 +136,7 @@ TEXT_COLUMNS = frozenset({"stage", "layer_name", "action"})
 SETTLEMENT_COLUMNS = ",".join(COLUMNS[SETTLEMENT_CSV])
 PROFILE_COLUMNS = ",".join(COLUMNS[PROFILES_CSV])
 LAYER_COLUMNS = ",".join(_LAYER_MEANS)
-LOAD_COLUMNS = ",".join(COLUMNS[LOADS_CSV])
+LOAD_COLUMNS = ",".join(COLUMNS[LOADS_CSV] + ADDED[LOADS_CSV])
 LOAD_SETTLEMENT_COLUMNS = ",".join(COLUMNS[LOAD_SETTLEMENT_CSV])
 GAUGE_COLUMNS = ",".join(COLUMNS[GAUGES_CSV])
 NEUTRAL_PLANE_COLUMNS = ",".join(COLUMNS[NEUTRAL_PLANE_CSV])
@@ -155,14 +165,15 @@ def _columns_error(path: Path, header: list[str], problem: str,
 def read_csv(path: Path) -> Table | None:
     """Columns of a contract CSV as arrays (text or float); ``None`` if the file does not exist.
 
-    The file name selects the columns (:data:`COLUMNS`). Raises :class:`ScenarioError` for an
-    empty file, a missing column, a short row or a non-numeric value, naming the file, the column
-    and the columns required. An empty cell is a quantity that does not exist there (e.g. the
-    friction below the last gauge section): NaN in the array; no file holds the text "nan".
+    The file name selects the columns (:data:`COLUMNS`, and those of :data:`ADDED` present).
+    Raises :class:`ScenarioError` for an empty file, a missing column, a short row or a
+    non-numeric value, naming the file, the column and the columns required. An empty cell is
+    a quantity that does not exist there (e.g. the friction below the last gauge section): NaN
+    in the array; no file holds the text "nan".
     """
     if not path.is_file():
         return None
-    return read_table(path, COLUMNS[path.name], TEXT_COLUMNS)
+    return read_table(path, COLUMNS[path.name], TEXT_COLUMNS, ADDED.get(path.name, ()))
 
 
 def read_table(path: Path, columns: tuple[str, ...], text: frozenset[str] = frozenset(),

@@ -18,8 +18,12 @@ minus adjacent soil settlement (positive = the pile moves down relative to the s
   layer mid-heights (``d`` the pile's own diameter).
 * Layer means per pile and soil layer: area-weighted over the layer's shaft interface nodes of
   that pile; the centre pile after every step (``layer_history.csv``), every pile at the output
-  times (``interface_layers.csv``). Normal traction: effective, kPa, tension positive;
+  times (``interface_layers.csv``); a layer's depths are those of the pile's shaft in it (the
+  toe ends the layer the pile ends in). Normal traction: effective, kPa, tension positive;
   viscoplastic slip: magnitude, m.
+* Pile loads (``pile_loads.csv``): the axial force due to the loads at the pile's uppermost
+  section (its top element layer's mid-height, written as ``depth_m``); the head itself (the
+  cap's action on the pile) is :mod:`pilegroup.studies.run.section_probe`'s.
 
 Every pile of the foundation is reported. In a symmetry-reduced model a pile outside the mesh
 takes the values of its mirror image, and a pile cut by a plane reports its meshed section's
@@ -265,7 +269,7 @@ class PileProbe:
             dN, N = forces[self.source[i]]
             if N.size:
                 x, y = self.xy[i - 1]
-                self.load_rows.append(f"{t:.6g},{i},{x:.6g},{y:.6g},{N[0]:.9g}")
+                self.load_rows.append(f"{t:.6g},{i},{x:.6g},{y:.6g},{N[0]:.9g},{dN[0]:.6g}")
             if self._itf is not None:
                 dz, fr, rel = self.interface_profile(self.source[i], fields)
                 Nz = np.interp(dz, dN, N) if N.size else np.zeros_like(dz)
@@ -313,12 +317,17 @@ class PileProbe:
         self.layer_rows += self._layer_rows(t, self.centre, means)
 
     def _layer_rows(self, t: float, i: int, means: dict) -> list[str]:
-        """CSV rows (``LAYER_COLUMNS``) of pile ``i``'s layer ``means`` at time ``t``."""
+        """CSV rows (``LAYER_COLUMNS``) of pile ``i``'s layer ``means`` at time ``t``.
+
+        A layer's depths are those of pile ``i``'s shaft in it: the bottom is the pile's toe
+        where the pile ends in the layer.
+        """
         rows = []
+        toe = self.sc.piles.lengths[i - 1]
         for j, (fr, rel, vp, sn) in means.items():
             lay = self.sc.layers[j - 1]
             top, bot = 0.0 - self._layer_tops[j - 1], 0.0 - self._layer_tops[j]
-            bot = bot if np.isfinite(bot) else self.sc.site.depth_m
+            top, bot = min(top, toe), min(bot, toe)
             rows.append(f"{t:.6g},{i},{j},{lay.name},{top:.6g},{bot:.6g},{fr:.9g},"
                         f"{rel:.9g},{vp:.9g},{sn:.9g}")
         return rows

@@ -1,15 +1,27 @@
-"""Post-processing (studies.report): synthetic run folders with analytically chosen values."""
+"""Post-processing (studies.report): synthetic run folders with analytically chosen values.
 
+Figures and report speak of the scenario: its piles by place, its layers, its toes; published
+values only from its ``[reference]`` (docs/results.md, "Figures and report of a run"); the last
+test reads the small pile's real run.
+"""
+
+import csv
+import dataclasses
 import json
 import math
+import shutil
 from pathlib import Path
 
+import numpy as np
 import pytest
+from matplotlib.text import Text
 
-from pilegroup.model import ScenarioError
+from pilegroup.model import ScenarioError, load_scenario
 from pilegroup.studies.cli.commands import build_parser, main
 from pilegroup.studies.report.plots import FIGURES
 from pilegroup.studies.report.run_report import results_markdown, write_report
+from pilegroup.studies.results.pile_roles import key_piles, name_piles
+from pilegroup.studies.results.rundata import load_run
 from pilegroup.studies.results.tables import COLUMNS
 
 #: Four layers: the soft layers 1-3 of Table 1 and one stiff layer (number, name, top, bottom).
@@ -21,6 +33,24 @@ F0 = {1: 5.0, 2: 8.0, 3: 12.0, 4: 30.0}  # kPa at the end of loading
 W_END = {1: 0.012, 2: 0.010, 3: 0.006, 4: 0.002}  # m, scale of the relative displacement
 CENTRE = 5
 GAUGE_DEPTHS = [0.5, 10.0, 20.0, 30.0]
+#: The piles' length in soil (m): the last layer reaches on to the block's bottom at 80 m.
+PILE_LENGTH, BLOCK_DEPTH = 40.0, 80.0
+#: The vertical load of the synthetic scenario's load stage (kN).
+APPLIED_KN = 12000.0
+
+
+def scenario_json(reference: bool) -> dict:
+    """scenario.json of the synthetic run: 3 x 3 piles at 3 m, 40 m long, the layers of LAYERS
+    (the last one down to the block's bottom), and pier667's ``[reference]`` if asked."""
+    layers = [{"name": name, "thickness_m": bot - top} for _, name, top, bot in LAYERS]
+    layers[-1]["thickness_m"] = None
+    ref = dataclasses.asdict(load_scenario("pier667").reference) if reference else None
+    return {"name": "synthetic", "site": {"depth_m": BLOCK_DEPTH}, "layers": layers,
+            "piles": {"diameter_m": 1.0, "length_in_soil_m": PILE_LENGTH,
+                      "positions_m": [[3.0 * c, 3.0 * r] for r in range(3) for c in range(3)]},
+            "stages": [{"name": "geostatic", "kind": "geostatic"},
+                       {"name": "loading", "kind": "load", "cap_load_kN": APPLIED_KN}],
+            "reference": ref}
 
 
 def gauge_row(t: float, pile: int, s: int, z: float) -> list[object]:
@@ -91,8 +121,12 @@ def _lateral_tables(out: Path, files: tuple[str, ...]) -> None:
 
 
 def make_run(out: Path, slopes: dict[int, float] | None = None, shape: str = "early",
-             files: tuple[str, ...] = tuple(COLUMNS), complete: bool = True) -> Path:
-    """A run folder following the data contract (centre pile 5 and corner pile 1)."""
+             files: tuple[str, ...] = tuple(COLUMNS), complete: bool = True,
+             reference: bool = True) -> Path:
+    """A run folder following the data contract (centre pile 5 and corner pile 1).
+
+    Its scenario.json carries pier667's ``[reference]`` unless ``reference`` is false.
+    """
     slopes = slopes if slopes is not None else {1: 0.01, 2: 0.02, 3: 0.015, 4: -0.01}
     out.mkdir(parents=True, exist_ok=True)
     stage = {0.0: "geostatic", 1.0: "loading"}
@@ -134,8 +168,13 @@ def make_run(out: Path, slopes: dict[int, float] | None = None, shape: str = "ea
         rows = [[1.0 + k, p, k / 10, qi / (1 if p == 0 else 9), wi, ""]
                 for p in (0, 1, CENTRE) for k, (qi, wi) in enumerate(zip(q, w, strict=True))]
         write_csv(out / "capacity.csv", list(COLUMNS["capacity.csv"]), rows)
+    if "pile_heads.csv" in files:  # the head: 1 % above the uppermost section's force
+        rows = [[t, 3 * r + c + 1, 3.0 * c, 3.0 * r, 1010.0 + 101.0 * (3 * r + c + 1)]
+                + [0.0] * 5 + [0.0] for t in OUTPUT_DAYS for r in range(3) for c in range(3)]
+        write_csv(out / "pile_heads.csv", list(COLUMNS["pile_heads.csv"]), rows)
     (out / "summary.json").write_text(json.dumps({"scenario": "synthetic", "complete": complete,
                                                   "centre_pile": CENTRE}))
+    (out / "scenario.json").write_text(json.dumps(scenario_json(reference)))
     return out
 
 
@@ -163,8 +202,10 @@ def test_settlement_table_and_paper_value(tmp_path):
         stage = {0.0: "geostatic", 1.0: "loading"}.get(t, "consolidation")
         assert f"| {t:g} | {stage} | {1000 * settlement(t):.3f} |" in sec
     w = settlement(317.0)
-    assert f"t = 317 day: **{1000 * w:.3f} mm** ({100 * w:.2f} cm), 10 % of the paper's" in sec
-    assert "Table 2" in sec and "**30.3 cm**" in sec and "no measured settlement" in sec
+    assert f"t = 317 day: **{1000 * w:.3f} mm** ({100 * w:.2f} cm)." in sec
+    # pier667's [reference]: the paper's ABAQUS 30.3 cm
+    assert "Reference settlement: **303 mm** (no time stated)" in sec
+    assert "Table 2" in sec and "no measured settlement" in sec and "10 % of it" in sec
     assert "End of loading: t = 1 day" in md and "run status: complete" in md
     for f, *_ in FIGURES:
         assert f"](plots/{f})" in md
@@ -174,7 +215,7 @@ def test_gauge_error_table_at_the_last_output_time(tmp_path):
     md = results_markdown(make_run(tmp_path / "run"), "plots")
     sec = section(md, "Virtual strain gauges")
     assert sec.startswith(": the field method against the model, t = 317 day")
-    assert f"Centre pile {CENTRE}" in sec
+    assert "Pile 5 (row 2, column 2, centre)" in sec
     # z = 20 m: N = 1200 (model 1198), f = 12 (model 11.5), w = 10 mm (model 5 mm)
     assert ("| 3 | 20 | 1200.0 | 1198.0 | 12.000 | 11.500 | +0.500 | 10.000 | 10.000 | 5.000 "
             "| +5.000 |") in sec
@@ -302,3 +343,129 @@ def test_report_has_help(capsys):
         build_parser().parse_args(["report", "--help"])
     assert info.value.code == 0
     assert "usage: pilegroup report" in capsys.readouterr().out
+
+
+#: Text of a publication that only a scenario with a [reference] may show.
+PUBLISHED = ("ABAQUS", "Table 1", "Table 2", "30.3", "303", "10856", "soft layer", "first 89",
+             "89 d (reference)", "paper", "Li, Feng", "reference", "Reference")
+
+
+def texts(run_dir) -> dict[str, str]:
+    """Every figure's text (titles, labels, legends, notes) and the Markdown summary, by name."""
+    run = load_run(run_dir)
+    out = {}
+    for name, _, needs, plot in FIGURES:
+        if run.has(needs):
+            fig = plot(run)
+            out[name] = "\n".join(t.get_text() for t in fig.findobj(Text))
+    out["report.md"] = results_markdown(run_dir, "plots").replace(str(run_dir), "RUN")
+    return out
+
+
+def test_piles_are_named_by_their_place():
+    grid = name_piles([(x, y) for y in (-2.5, 0.0, 2.5) for x in (-3.5, 0.0, 3.5)], [63.5] * 9)
+    assert [p.role for p in grid] == ["corner", "edge", "corner", "edge", "centre", "edge",
+                                      "corner", "edge", "corner"]
+    assert grid[4].name == "pile 5 (row 2, column 2, centre)" and grid[4].length == 63.5
+    assert grid[5].short == "pile 6, r2 c3"
+    # a 2 x 3 group (3 columns along x, 2 rows along y) has no centre pile
+    two = name_piles([(x, y) for y in (-1.8, 1.8) for x in (-3.6, 0.0, 3.6)])
+    assert [p.role for p in two] == ["corner", "edge", "corner"] * 2
+    assert name_piles([(0.0, 0.0)])[0].name == "the pile"
+    assert [p.role for p in name_piles([(0, 0), (2, 0), (4, 0)])] == ["end", "centre", "end"]
+    odd = name_piles([(0.0, 0.0), (1.0, 2.0), (5.0, 1.0)])
+    assert odd[1].name == "pile 2 (x = 1 m, y = 2 m)" and odd[1].row is None
+
+
+def test_key_piles_are_one_of_each_role_and_the_most_and_least_loaded():
+    grid = name_piles([(x, y) for y in (-2.5, 0.0, 2.5) for x in (-3.5, 0.0, 3.5)])
+    loads = {1: 1390.3, 2: 1108.6, 3: 1390.3, 4: 1128.5, 5: 820.7, 6: 1128.5, 7: 1390.3,
+             8: 1108.6, 9: 1390.3}
+    picked = [(p.number, why) for p, why in key_piles(grid, loads)]
+    assert picked == [(1, "corner, most loaded"), (4, "edge"), (5, "centre, least loaded")]
+    two = name_piles([(x, y) for y in (-1.8, 1.8) for x in (-3.6, 0.0, 3.6)])
+    lateral = {1: 3000.0, 2: 4000.0, 3: 5000.0, 4: 3000.0, 5: 4000.0, 6: 5000.0}
+    assert [(p.number, why) for p, why in key_piles(two, lateral)] == [
+        (1, "least loaded"), (2, "edge"), (3, "corner, most loaded")]
+
+
+def test_without_a_reference_nothing_published_is_drawn_or_written(tmp_path):
+    run = make_run(tmp_path / "run", reference=False)
+    for name, text in texts(run).items():
+        found = [w for w in PUBLISHED if w in text]
+        assert not found, (name, found)
+    md = results_markdown(run, "plots")
+    assert "### Shaft friction from the end of loading to the last output time" in md
+    assert "grow fastest" not in md  # the early period is a reference's
+    assert "vertical load of the last load stage: 12000.0 kN" in md
+
+
+def test_pier667_s_reference_is_drawn_and_written(tmp_path):
+    ref = load_scenario("pier667").reference
+    assert ref is not None and ref.settlement_m == 0.303 and ref.soft_layers == (1, 2, 3)
+    assert ref.total_load_kN == 10856.0 and ref.early_day == 89.0
+    out = texts(make_run(tmp_path / "run"))
+    assert "reference: 303 mm (no time stated)" in out["settlement_time.png"]
+    assert "89 d (reference)" in out["friction_time.png"]
+    assert "soft layers 1, 2, 3 of the reference" in out["friction_time.png"]
+    md = out["report.md"]
+    for words in ("ABAQUS", "Table 2", "reference total load on the foundation: 10856 kN",
+                  "### Does shaft friction grow with time in the soft layers?",
+                  "### Does relative displacement grow fastest in the first 89 days?",
+                  "Soft layers 1, 2, 3 of the reference (clay, mud, mucky_clay)"):
+        assert words in md, words
+
+
+def test_figures_name_piles_by_place_and_end_below_the_deepest_toe(tmp_path):
+    run = load_run(make_run(tmp_path / "run"))
+    out = texts(run.out_dir)
+    # the synthetic profiles hold piles 1 and 5 only; pile 9 carries the most
+    assert "pile 1, r1 c1\n(least loaded)" in out["axial_force_profiles.png"]
+    assert "pile 5, r2 c2\n(centre)" in out["axial_force_profiles.png"]
+    assert "pile 5 (row 2, column 2, centre)" in out["friction_time.png"]
+    assert "mucky_clay" in out["axial_force_profiles.png"]  # the layers by name
+    for name, _, _, plot in FIGURES:
+        if name in ("axial_force_profiles.png", "friction_profiles.png",
+                    "gauge_friction_profiles.png", "unified_method.png", "pile_bending.png"):
+            bottom, top = plot(run).axes[0].get_ylim()
+            assert (bottom, top) == pytest.approx((1.1 * PILE_LENGTH, 0.0)), name
+
+
+def test_a_group_without_a_centre_pile_has_none_in_its_report(tmp_path):
+    run_dir = make_run(tmp_path / "run")
+    sc = json.loads((run_dir / "scenario.json").read_text())
+    sc["piles"]["positions_m"] = [[3.0 * c, 3.0 * r] for r in range(2) for c in range(3)]
+    (run_dir / "scenario.json").write_text(json.dumps(sc))
+    for name, text in texts(run_dir).items():
+        assert "centre pile" not in text and ", centre)" not in text, name
+    assert "pile 5 (row 2, column 2, edge)" in texts(run_dir)["report.md"]
+
+
+def _rows(path):
+    with path.open() as fh:
+        return list(csv.DictReader(fh))
+
+
+@pytest.mark.parametrize("small_pile_run", ["viscoplastic"], indirect=True)
+def test_a_real_run_cut_at_the_toe_and_its_two_head_forces(small_pile_run, tmp_path):
+    run_dir = tmp_path / "run"
+    shutil.copytree(small_pile_run, run_dir)
+    toe = load_run(run_dir).deepest_toe
+    assert toe == 12.0  # the block reaches 20 m
+    for name in ("interface_layers.csv", "layer_history.csv"):
+        rows = _rows(run_dir / name)
+        assert max(float(r["depth_bottom_m"]) for r in rows) == pytest.approx(toe), name
+    loads = [r for r in _rows(run_dir / "pile_loads.csv") if float(r["t_day"]) == 2.0]
+    heads = [r for r in _rows(run_dir / "pile_heads.csv") if float(r["t_day"]) == 2.0]
+    depth = float(loads[0]["depth_m"])
+    assert 0.0 < depth < 2.0  # the top element layer's mid-height
+    head, section = float(heads[0]["N_kN"]), float(loads[0]["head_force_kN"])
+    assert head == pytest.approx(500.0, rel=1e-3)  # the cap load, at the head
+    assert section < head  # read from the stress below the head (docs/model.md)
+    write_report(run_dir)
+    for name, text in texts(run_dir).items():
+        found = [w for w in PUBLISHED if w in text]
+        assert not found, (name, found)
+    assert "the cap's action on the pile at its head" in texts(run_dir)["report.md"]
+    ylim = FIGURES[5][3](load_run(run_dir)).axes[0].get_ylim()
+    assert np.allclose(ylim, (1.1 * toe, 0.0))
