@@ -87,10 +87,12 @@ DESCRIPTIONS = {
               "consolidation cases against wall time and peak memory."),
     "report": ("Read the CSV and JSON files of a finished or interrupted run (settlement.csv, "
                "pile_profiles.csv, layer_history.csv, pile_loads.csv, load_settlement.csv, "
-               "gauges.csv, summary.json), write PNG "
-               "figures to OUT_DIR/plots (figures whose file is missing are skipped) and, with "
-               "--markdown, a results section. A CSV with a wrong header is invalid input "
-               "(exit 2)."),
+               "gauges.csv, pile_heads.csv, cap_motion.csv, summary.json), write PNG "
+               "figures to OUT_DIR/plots (figures whose file is missing are skipped), the "
+               "report an engineer hands on to OUT_DIR/report.md and OUT_DIR/report.html "
+               "(self-contained: figures embedded, opens offline; a failed or stopped run "
+               "says so at its top) and, with --markdown, a results section. A folder that is "
+               "not a run or a CSV with a wrong header is invalid input (exit 2)."),
 }
 
 
@@ -281,10 +283,11 @@ def _bench_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def _cmd_report(args: argparse.Namespace) -> int:
-    from pilegroup.studies.report.run_report import results_markdown, write_report
+    from pilegroup.studies.report.handover import write_handover
+    from pilegroup.studies.report.run_report import results_markdown
 
     out = Path(args.out_dir)
-    paths = write_report(out)
+    paths = write_handover(out)
     for path in paths:
         print(path)
     if args.markdown:
@@ -324,7 +327,8 @@ def build_parser() -> argparse.ArgumentParser:
         ("mesh", "build the all-hexahedral mesh of a scenario", _mesh_arguments),
         ("verify", "run verification cases against closed forms", _verify_arguments),
         ("bench", "benchmarks that print tables (not tests)", _bench_arguments),
-        ("report", "plots and a Markdown summary of a run's output folder", _report_arguments),
+        ("report", "figures, report.md and report.html of a run's output folder",
+         _report_arguments),
     ):
         add_arguments(sub.add_parser(name, help=help_, description=DESCRIPTIONS[name]))
     for name, help_, description, add_arguments in BATCH_COMMANDS + LAB_COMMANDS:

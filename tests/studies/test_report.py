@@ -316,7 +316,8 @@ def test_cli_report_with_markdown(tmp_path, capsys):
     run = make_run(tmp_path / "run")
     md = tmp_path / "doc" / "results.md"
     assert main(["report", str(run), "--markdown", str(md)]) == 0
-    assert len(capsys.readouterr().out.splitlines()) == len(FIGURES) + 1
+    # the figures, report.md, report.html and the --markdown file
+    assert len(capsys.readouterr().out.splitlines()) == len(FIGURES) + 3
     text = md.read_text()
     assert "](../run/plots/friction_profiles.png)" in text
     assert all((run / "plots" / f[0]).is_file() for f in FIGURES)
