@@ -261,7 +261,7 @@ class NewtonOptions:
     max_it: int = 15
     line_search: int = 4
     krylov_forcing: float = 0.1
-    alt_after: int = 8
+    alt_after: int = 4
     alt_factor: float = 100.0
 
     def __post_init__(self) -> None:
