@@ -57,6 +57,7 @@ def scenario(cap=14.0, spacing=3.0, symmetry="auto"):
     d["layers"] = d["layers"][:2]
     d["layers"][1].pop("thickness_m")  # to the bottom
     d["outputs"].pop("gauge_depths_m", None)
+    d.pop("reference")  # the paper's values name layers and gauges this layout has not
     d["numerics"] = {"element": "Q1Q1", "symmetry": symmetry, "mesh": dict(MESH)}
     return scenario_from_dict(d)
 

@@ -14,7 +14,7 @@ meshes are coarse: ``numerics.mesh.scale`` 2-4 (fewer element layers, longer ele
 the edges around a pile automatic or 12, 16 or 28 (the bundled sizing's).
 
 Tiers: a fast one (6 derandomised layouts of up to 4 x 4 piles, and one of mixed piles off
-the cap's centre) and the Pier 667 5 x 5 case of issue 43 (d = 1 m at 3 m under a 14.0 m cap,
+the cap's centre) and the Pier 667 5 x 5 case (d = 1 m at 3 m under a 14.0 m cap,
 ``size_m = 2`` with 28 edges around a pile, the full model: it used to abort DOLFINx), which
 must mesh; slow: 60 layouts of up to 8 x 8 (and the two above), and four (and the Pier 667
 case) on two ranks through the command line (``mpirun -n 2 pilegroup run --stop-after mesh``),
@@ -250,7 +250,7 @@ def test_pier667_5x5_under_14m_cap_meshes():
 
 
 @pytest.mark.xfail(strict=True, raises=ScenarioError, reason=(
-    "issue 43 item 4: a valid layout whose far field the mesher cannot make all-quadrilateral "
+    "a valid layout whose far field the mesher cannot make all-quadrilateral "
     "is refused after validation (numerics.mesh.growth)"))
 def test_layout_whose_far_field_was_refused_meshes():
     assert mesh_or_refusal(FAR_FIELD_REFUSED) is not None
@@ -393,7 +393,7 @@ def test_a_failing_rank_leaves_a_failed_summary_and_a_free_lock(where, tmp_path)
 @pytest.mark.slow
 @pytest.mark.mpi
 @pytest.mark.xfail(strict=True, raises=FileNotFoundError, reason=(
-    "issue 43 item 4: a rank killed by a signal (SIGABRT, as DOLFINx's create_mesh did on a bad "
+    "a rank killed by a signal (SIGABRT, as DOLFINx's create_mesh did on a bad "
     "mesh) runs no Python, and nothing else writes summary.json"))
 def test_a_rank_killed_by_a_signal_leaves_a_failed_summary(tmp_path):
     r = cli_mesh(SMALL.scenario_dict(), tmp_path, timeout=300,

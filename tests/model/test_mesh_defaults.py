@@ -36,6 +36,7 @@ def group(n, d, length=40.0, lateral=False):
     data["layers"] = data["layers"][:4] + [data["layers"][-1]]
     data["layers"][-1]["interface"] = data["layers"][3]["interface"]  # the piles reach it
     data["outputs"].pop("gauge_depths_m")
+    data.pop("reference")  # the paper's values name layers and gauges of the pier
     if lateral:
         data["stages"][1] |= {"Fx_kN": 500.0}
     data.pop("numerics", None)

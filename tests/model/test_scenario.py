@@ -169,6 +169,7 @@ def test_single_pile_and_other_grids_are_expressible():
     del d["layers"][0]["thickness_m"]
     del d["cap"]
     d["outputs"]["gauge_depths_m"] = [1.0, 19.0]
+    d.pop("reference")  # the paper's values name layers of the pier
     sc = scenario_from_dict(d)
     assert sc.piles.xy == ((0.0, 0.0),)
     d["piles"] = {"diameter_m": 0.6, "length_in_soil_m": 20.0,

@@ -3,7 +3,7 @@ reference of our own (studies/verification/soft_soil_column.py).
 
 Source of the reference: finite volumes in depth and backward Euler in time with the same
 pointwise law (Vermeer & Neher 1999) in every cell; tolerance 1 % of the settlement at 300 days
-(issue 45). Measured (fast size, 2026-11-28): 4.1e-3, the finite-element steps' backward-Euler
+(docs/model.md). Measured (fast size, 2026-11-28): 4.1e-3, the finite-element steps' backward-Euler
 lag (2.3e-3 with twice the steps per decade); the fast reference itself is within 1.1e-3 of one
 with twice the cells and half the step growth (docs/model.md, "Soil models per layer").
 """
