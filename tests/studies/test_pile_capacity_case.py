@@ -60,11 +60,11 @@ def _with_bearing(value):
 
 
 @pytest.mark.parametrize(("value", "match"), [
-    (0.0, r"layers\[0\]\.interface\.base_bearing_kPa = 0\.0 \(kPa\): must be a finite "
-          r"number > 0"),
-    (2.0e5, r"base_bearing_kPa = 200000\.0 \(kPa\): must be in \[1, 100000\]"),
-    (40.0, r"layers\[0\]\.interface\.base_bearing_kPa = 40\.0 \(kPa\): must exceed the in-situ "
-           r"vertical effective stress at the toe of pile 1 \(40\.95 kPa at 5 m\)"),
+    (0.0, r"layers\[0\]\.interface\.base_bearing_kPa \(layer 1\) = 0\.0 \(kPa\): must be a "
+          r"finite number > 0"),
+    (2.0e5, r"base_bearing_kPa \(layer 1\) = 200000\.0 \(kPa\): must be in \[1, 100000\]"),
+    (40.0, r"layers\[0\]\.interface\.base_bearing_kPa \(layer 1\) = 40\.0 \(kPa\): must exceed "
+           r"the in-situ vertical effective stress at the toe of pile 1 \(40\.95 kPa at 5 m\)"),
 ])
 def test_bad_base_bearing_is_refused(value, match):
     with pytest.raises(ScenarioError, match=match):

@@ -25,7 +25,7 @@ def _two_layers(wt=0.0, **rest):
     low = dataclasses.replace(lay[1], thickness_m=None, gamma_kN_per_m3=18.0, E_MPa=20.0,
                               nu=0.25, **rest)
     return dataclasses.replace(sc, site=dataclasses.replace(sc.site, water_table_depth_m=wt),
-                               layers=(top, low))
+                               layers=(top, low), reference=None)  # the paper's: 10 layers
 
 
 def test_two_layer_column_by_hand():
