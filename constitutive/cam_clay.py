@@ -34,11 +34,12 @@ from functools import cached_property
 
 import numpy as np
 
-from pilegroup.constitutive.base import as_points, broadcast_state
+from pilegroup.constitutive.base import as_points
 from pilegroup.constitutive.critical_state import (
     ElasticTrial,
     bracketed_newton,
     eta_k0nc,
+    initial_stress,
     k0_stress,
     m_from_phi,
     pq,
@@ -194,14 +195,7 @@ class ModifiedCamClay:
             pc0: pre-consolidation pressure (kPa, scalar, ``(n,)``); default
                 :meth:`preconsolidation`. Raised to the ``p_c`` through ``stress0`` if lower.
         """
-        if stress0 is None:
-            raise ConstitutiveError("ModifiedCamClay needs an initial effective stress with "
-                                    "p' > 0 (stress0 is None)")
-        s0 = broadcast_state(n, stress0, 6, "stress0")
-        p0, q0, _ = pq(s0)
-        if np.any(~(p0 > 0.0)):
-            raise ConstitutiveError(f"initial p' = {float(p0.min()):g} kPa: Modified Cam Clay "
-                                    "needs p' > 0 at every point")
+        s0, p0, q0 = initial_stress(n, stress0, "Modified Cam Clay")
         if pc0 is None:
             pc = self.preconsolidation(s0)
         else:

@@ -29,7 +29,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from pilegroup.constitutive.base import MANDEL_I
+from pilegroup.constitutive.base import MANDEL_I, broadcast_state
 from pilegroup.errors import ConstitutiveError
 from pilegroup.validate import require_in_range
 
@@ -129,6 +129,24 @@ def k0_stress(sigma_v: np.ndarray, k0: float) -> np.ndarray:
     out[:, 0] = out[:, 1] = -k0 * sv
     out[:, 2] = -sv
     return out
+
+
+def initial_stress(n: int, stress0: np.ndarray | None, law: str
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(stress, p, q)`` of ``n`` points at rest; raises unless ``p' > 0`` at every point.
+
+    ``stress0``: effective stress (Mandel, kPa, ``(6,)`` or ``(n, 6)``); ``law`` names the law
+    that needs it in the message.
+    """
+    if stress0 is None:
+        raise ConstitutiveError(f"{law} needs an initial effective stress with p' > 0 "
+                                "(stress0 is None)")
+    s0 = broadcast_state(n, stress0, 6, "stress0")
+    p0, q0, _ = pq(s0)
+    if np.any(~(p0 > 0.0)):
+        raise ConstitutiveError(f"initial p' = {float(p0.min()):g} kPa: {law} needs p' > 0 at "
+                                "every point")
+    return s0, p0, q0
 
 
 def vertical_effective(stress: np.ndarray) -> np.ndarray:

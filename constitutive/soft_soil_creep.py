@@ -42,10 +42,11 @@ from functools import cached_property
 
 import numpy as np
 
-from pilegroup.constitutive.base import as_points, broadcast_state
+from pilegroup.constitutive.base import as_points
 from pilegroup.constitutive.critical_state import (
     ElasticTrial,
     bracketed_newton,
+    initial_stress,
     k0_stress,
     m_from_k0nc,
     pq,
@@ -169,14 +170,7 @@ class SoftSoilCreep:
             pp0: ``p_p^eq`` (kPa, scalar or ``(n,)``); default from ``OCR``/``POP`` (module
                 docstring). Raised to the ``p_eq`` of ``stress0`` if lower.
         """
-        if stress0 is None:
-            raise ConstitutiveError("SoftSoilCreep needs an initial effective stress with "
-                                    "p' > 0 (stress0 is None)")
-        s0 = broadcast_state(n, stress0, 6, "stress0")
-        p0, _, _ = pq(s0)
-        if np.any(~(p0 > 0.0)):
-            raise ConstitutiveError(f"initial p' = {float(p0.min()):g} kPa: Soft Soil Creep "
-                                    "needs p' > 0 at every point")
+        s0, _, _ = initial_stress(n, stress0, "Soft Soil Creep")
         peq0 = self.equivalent_pressure(s0)
         if pp0 is None:
             sp = preconsolidation_vertical(vertical_effective(s0), self.OCR, self.POP)

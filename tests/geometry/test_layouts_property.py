@@ -120,9 +120,9 @@ class Layout:
         return data
 
 
-#: Issue 43: Pier 667's piles (d = 1 m, 63.5 m) 5 x 5 at 3 m under a 14.0 m cap (0.5 m from
-#: the outer piles' surfaces), the failing run's plan sizing (``size_m = 2``, 28 edges around
-#: a pile), the full model.
+#: Pier 667's piles (d = 1 m, 63.5 m) 5 x 5 at 3 m under a 14.0 m cap (0.5 m from the outer
+#: piles' surfaces), with the plan sizing that once aborted DOLFINx (``size_m = 2``, 28 edges
+#: around a pile), the full model.
 PIER667_5X5 = Layout(5, 5, 1.0, (3.0, 3.0), (0.5,) * 4, 63.5, symmetry="none",
                      mesh=(("scale", 2.0), ("size_m", 2.0), ("n_circ_min", 28)))
 

@@ -235,15 +235,14 @@ CATALOGUE: dict[str, tuple[str, ...]] = {
     "constitutive/cam_clay.py::_require_one": ("mcc-without-M",),
     "constitutive/cam_clay.py::ModifiedCamClay.__post_init__": (
         G, "mcc-kappa", G, G, G, G, G, "ocr-below-1", G),
-    "constitutive/cam_clay.py::ModifiedCamClay.initial_state": (G, G),
     "constitutive/cam_clay.py::ModifiedCamClay._return": (R,),
     "constitutive/critical_state.py::require_ocr_pop": ("ocr-below-1", G, "ocr-and-pop"),
+    "constitutive/critical_state.py::initial_stress": (G, G),
     "constitutive/critical_state.py::ElasticTrial.__init__": (R,),
     "constitutive/critical_state.py::bracketed_newton": (R,),
     # lambda*, kappa*, mu*, phi, c, nu_ur, OCR/POP, K0nc (not given), tau
     "constitutive/soft_soil_creep.py::SoftSoilCreep.__post_init__": (
         G, "ssc-kappa-star", "ssc-mu-star-negative", "ssc-phi-zero", G, G, "ocr-below-1", G, G),
-    "constitutive/soft_soil_creep.py::SoftSoilCreep.initial_state": (G, G),
     "constitutive/base.py::as_points": (G,),
     "constitutive/base.py::broadcast_state": (G,),
     # K, n, R_f, c, phi, eta, k_normal, delta, delta from phi = 0, N, r_w, P_a, p_floor,
