@@ -12,7 +12,8 @@ validate`` makes them and a run makes them before meshing, with the scenario's k
 * the interface evaluated at Gauss points needs trilinear displacements
   (:func:`check_quadrature`);
 * the installation pore pressures leave the horizontal effective stress compressive
-  everywhere below the water table, with the in-situ state of :mod:`pilegroup.model.insitu`
+  everywhere below the water table, and a Mohr-Coulomb or Drucker-Prager soil within its
+  strength (:func:`strength_room`), with the in-situ state of :mod:`pilegroup.model.insitu`
   (:func:`check_installation`; the solver checks it again at the mesh's pressure nodes,
   ``pilegroup.solver.geostatic.SoilColumn.check_installation``).
 """
@@ -206,9 +207,30 @@ class _Ratio:
         u0 = lay.excess_pore_pressure_ratio * sv + lay.excess_pore_pressure_kPa
         u0 += seepage_at(self.seep, depth)
         room = lay.k0 * (sv - u0)
+        if _soil_model(sc, lay) in PLASTIC_SOILS:
+            room = min(room, strength_room(sv - u0, lay.k0, lay.phi_deg or 0.0, lay.c_kPa or 0.0))
         ratio = sc.piles.installation.excess_pore_pressure_ratio  # type: ignore[union-attr]
         q = math.inf if room <= 0.0 else ratio * sv * s / room
         return InstallationPeak(q, pile, angle, shown, j)
+
+
+def strength_room(s: float, k0: float, phi_deg: float, c_kPa: float) -> float:
+    """The largest pore pressure (kPa) the state at rest can take within Mohr-Coulomb.
+
+    ``s`` the vertical effective stress at rest (kPa, compression positive), ``k0 s`` the
+    horizontal one. A pore pressure ``u`` lowers both by ``u``; the state stays within
+    ``sigma_1 - sigma_3 <= (sigma_1 + sigma_3) sin(phi) + 2 c cos(phi)`` for
+    ``u <= ((1 + K0) s sin(phi) + 2 c cos(phi) - |1 - K0| s) / (2 sin(phi))`` (any ``u`` with
+    ``phi = 0``). The Drucker-Prager outer cone coincides with it on the triaxial-compression
+    meridian (``K0 <= 1``) and is wider elsewhere. A state at rest already beyond the strength
+    (a ``K0`` the layer's ``c``, ``phi`` cannot hold) sets no bound here: that is the state the
+    scenario gives, not one the installation makes.
+    """
+    sin, cos = math.sin(math.radians(phi_deg)), math.cos(math.radians(phi_deg))
+    spare = (1.0 + k0) * s * sin + 2.0 * c_kPa * cos - abs(1.0 - k0) * s
+    if sin <= 0.0 or spare < 0.0:
+        return math.inf
+    return spare / (2.0 * sin)
 
 
 def installation_ratio(sc: RuledScenario) -> InstallationPeak | None:
@@ -261,7 +283,9 @@ def check_installation(sc: RuledScenario) -> None:
     y = sc.piles.xy[n][1] + r0 * math.sin(peak.angle)
     where = (f"on the shaft of pile {n + 1} (x = {x:.3g}, y = {y:.3g} m, {peak.depth:g} m deep,"
              f" layer {peak.layer + 1}")
-    reach = (f"reaches {peak.ratio:.3g} times the horizontal effective stress K0 (sigma'_v - u0)"
+    reach = (f"reaches {peak.ratio:.3g} times what the soil can take there (the horizontal"
+             " effective stress K0 (sigma'_v - u0), or less where the layer's Mohr-Coulomb"
+             " strength c, phi would be exceeded first)"
              if math.isfinite(peak.ratio) else "meets no horizontal effective stress:"
              " the pore pressure at rest u0 (the layer's initial excess pore pressure and the"
              " seepage) already reaches sigma'_v")
@@ -270,7 +294,8 @@ def check_installation(sc: RuledScenario) -> None:
         ins.excess_pore_pressure_ratio,  # type: ignore[union-attr]
         f"the installation pore pressure {reach} {where}; the fields of neighbouring piles add"
         " up): it must stay below it everywhere below the water table, or the soil would start"
-        " with tensile effective stress", "-")
+        " with tensile effective stress or beyond its strength (lower the ratio or the"
+        " radius_ratio)", "-")
 
 
 def check_all(sc: RuledScenario) -> None:
@@ -283,4 +308,4 @@ def check_all(sc: RuledScenario) -> None:
 
 __all__ = ["SHAFT_POINTS", "InstallationPeak", "RuledScenario", "check_all",
            "check_installation", "check_laws", "check_quadrature", "check_strength_keys",
-           "installation_ratio"]
+           "installation_ratio", "strength_room"]

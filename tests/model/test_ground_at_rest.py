@@ -6,6 +6,7 @@ import copy
 import math
 import tomllib
 
+import numpy as np
 import pytest
 
 from pilegroup.geometry.adapter import resolve_geometry
@@ -207,3 +208,38 @@ def test_installation_on_an_artesian_layer():
         _installed(0.6, 1.5, -1.0)
     assert err.value.key == "piles.installation.excess_pore_pressure_ratio"
     assert "reaches 1.03 times" in str(err.value) and "8 m deep, layer 2" in str(err.value)
+
+
+@pytest.mark.parametrize("k0, phi, c", [(0.426, 35.0, 0.0), (0.7, 20.0, 5.0), (1.3, 25.0, 2.0),
+                                        (0.95, 2.6, 5.6)])
+def test_strength_room_puts_the_state_on_mohr_coulomb(k0, phi, c):
+    """At the pore pressure ``strength_room`` allows, the state at rest lowered by it lies on
+    the Mohr-Coulomb surface of the soil law itself (f = 0), and within it just below."""
+    from pilegroup.constitutive.soil import MohrCoulomb
+    from pilegroup.model.law_rules import strength_room
+
+    s = 120.0
+    u = strength_room(s, k0, phi, c)
+    law = MohrCoulomb(E=1e4, nu=0.3, c=c, phi_deg=phi)
+
+    def f(u_):  # tension positive Mandel vector: xx, yy, zz, then shear
+        return law.yield_function(np.array([[-(k0 * s - u_), -(k0 * s - u_), -(s - u_),
+                                             0.0, 0.0, 0.0]]))[0]
+    assert math.isfinite(u) and 0.0 < u
+    assert f(u) == pytest.approx(0.0, abs=1e-9 * s)
+    assert f(0.99 * u) < 0.0 < f(1.01 * u)
+
+
+def test_installation_in_the_pier_is_bounded_by_the_gravel_strength():
+    """Pier 667's gravel (phi 35 deg, c 0, K0 = 1 - sin phi) holds less installation pore
+    pressure than its horizontal effective stress: Mohr-Coulomb is reached first, and the run's
+    geostatic check would find the soil yielding (0.4-0.8 mm); validation refuses the ratio,
+    naming the gravel (layer 8)."""
+    data = tomllib.loads(bundled_text("pier667"))
+    data["piles"]["installation"] = {"excess_pore_pressure_ratio": 0.15, "radius_ratio": 5.0}
+    assert installation_ratio(scenario_from_dict(copy.deepcopy(data))).ratio < 1.0
+    data["piles"]["installation"]["excess_pore_pressure_ratio"] = 0.2
+    with pytest.raises(ScenarioError) as err:
+        scenario_from_dict(data)
+    assert "layer 8" in str(err.value) and "strength" in str(err.value)
+    assert "\n" not in str(err.value)
