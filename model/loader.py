@@ -24,7 +24,7 @@ from pilegroup.model.scenario import Scenario
 
 #: Scenarios shipped with the package (``pilegroup scenario show NAME``).
 BUNDLED = ("pier667", "pier667_downdrag", "group3x3_downdrag", "single_pile",
-           "pier667_lateral", "group2x3_lateral")
+           "pier667_lateral", "group2x3_lateral", "pier667_soft_soil")
 _INDEXED = re.compile(r"([A-Za-z_][A-Za-z0-9_]*)\[(\d+)\]")
 
 

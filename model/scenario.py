@@ -418,13 +418,16 @@ class Scenario:
         return next((st for st in self.stages if st.kind == "installation"), None)
 
     def total_cap_load(self) -> float:
-        """Cap load (kN) at the end of the last load stage (a capacity stage's ``max_load_kN``).
+        """The reference cap load (kN): load factor 1 stands for it.
 
-        Load factor 1 stands for this load.
+        A capacity stage's ``max_load_kN`` (the last stage's end); else the largest vertical
+        load of the load stages, so that a stage that takes load off (to 0 too) is a load
+        factor below 1 of the load it takes off.
         """
-        loads = [st.max_load_kN if st.kind == "capacity" else st.vertical_kN
-                 for st in self.stages if st.kind in ("load", "capacity")]
-        return float(loads[-1]) if loads else 0.0  # type: ignore[arg-type]
+        if self.stages and self.stages[-1].kind == "capacity":
+            return float(self.stages[-1].max_load_kN)  # type: ignore[arg-type]
+        loads = [st.vertical_kN for st in self.stages if st.kind == "load"]
+        return float(max(loads)) if loads else 0.0  # type: ignore[type-var]
 
     def load_centre(self) -> tuple[float, float, float]:
         """Centroid of the loaded face (m): the cap's top face, or the pile heads' centroid."""

@@ -187,6 +187,54 @@ def _option_cases() -> list[StressCase]:
                   for pair in ("Q1Q1", "Q2Q1")]
 
 
+def _soft_soil_sets(sc: Scenario, model: str) -> tuple[str, ...]:
+    """Every layer as ``model``, its parameters from the layer's ``E_MPa`` and ``e0``.
+
+    The correlation of the bundled ``pier667_soft_soil`` (its file states the sources):
+    ``lambda* = 100 kPa / (E ln 2)``, ``kappa* = lambda*/5``, ``mu* = lambda*/25``, OCR 1.5,
+    an effective friction angle of 25 deg; Cam Clay takes ``lam = lambda* (1 + e0)``,
+    ``kappa = kappa* (1 + e0)`` and ``phi_cs_deg`` = 25.
+    """
+    out = []
+    for j, lay in enumerate(sc.layers):
+        lam = 100.0 / (lay.E_MPa * 1000.0 * math.log(2.0))
+        keys = {"model": f'"{model}"', "OCR": "1.5"}
+        if model == "soft_soil_creep":
+            keys |= {"phi_deg": "25.0", "lambda_star": _num(lam), "kappa_star": _num(lam / 5.0),
+                     "mu_star": _num(lam / 25.0)}
+        else:
+            keys |= {"phi_cs_deg": "25.0", "lam": _num(lam * (1.0 + lay.e0)),
+                     "kappa": _num(lam / 5.0 * (1.0 + lay.e0))}
+        out += [f"layers[{j}].{k}={v}" for k, v in keys.items()]
+    return tuple(out)
+
+
+def _soft_soil_cases(sc: Scenario) -> list[StressCase]:
+    """Soft Soil Creep and Modified Cam Clay: as given, overloaded, a tiny step, unloaded.
+
+    Unloading: the last stage becomes a load stage that takes the cap load back to 0 over
+    the rest of the run (the soil swells along its unloading line; the creep slows down).
+    """
+    load = [(i, st.cap_load_kN) for i, st in enumerate(sc.stages) if st.kind == "load"]
+    last, end = len(sc.stages) - 1, sc.time.end_day
+    t_last = sc.time.start_day + sum(st.duration_day or 0.0 for st in sc.stages[:-1])
+    x10 = tuple(f"stages[{i}].cap_load_kN={_num(q * 10.0)}" for i, q in load)
+    unload = (f'stages[{last}].kind="load"', f"stages[{last}].cap_load_kN=0.0",
+              f"stages[{last}].duration_day={_num(end - t_last)}")
+    tiny = ("numerics.time.dt_initial_day=1e-06", "numerics.time.dt_min_day=1e-07")
+    out = []
+    for model, tag in (("soft_soil_creep", "ssc"), ("modified_cam_clay", "mcc")):
+        sets = _soft_soil_sets(sc, model)
+        out += [StressCase(tag, "soft soil", sets, f"every layer {model}"),
+                StressCase(f"{tag}_load_x10", "soft soil", (*sets, *x10),
+                           f"every layer {model}, cap load x 10"),
+                StressCase(f"{tag}_dt_1e-6", "soft soil", (*sets, *tiny),
+                           f"every layer {model}, first step 1e-6 day"),
+                StressCase(f"{tag}_unloading", "soft soil", (*sets, *unload),
+                           f"every layer {model}, the cap load taken off after loading")]
+    return out
+
+
 def stress_cases(sc: Scenario) -> tuple[StressCase, ...]:
     """Every case of the suite for scenario ``sc`` (its values scaled, its keys set)."""
     tied = 'interface.mode="tied"'
@@ -196,7 +244,7 @@ def stress_cases(sc: Scenario) -> tuple[StressCase, ...]:
     return tuple([*_time_cases(sc),
                   *_layer_cases(sc, "k_m_per_day", "permeability", (1e-12, 1e3), "k"),
                   *stiff, lowest_tied, *_load_cases(sc), *_option_cases(),
-                  *_capacity_cases(sc), *_memory_cases()])
+                  *_soft_soil_cases(sc), *_capacity_cases(sc), *_memory_cases()])
 
 
 # ---------------------------------------------------------------------------- output checks

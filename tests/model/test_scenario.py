@@ -258,3 +258,22 @@ def test_cap_contact_that_follows_the_interface_model_is_valid(mode, contact):
     sets = {"interface.mode": mode} | ({} if contact is None else
                                        {"cap.in_contact_with_soil": contact})
     assert load_scenario("pier667", sets).cap.in_contact_with_soil is contact
+
+
+def test_a_stage_that_unloads_is_a_load_factor_below_one():
+    """Load factor 1 is the largest cap load, not the last one: a load stage that takes the
+    load off to 0 after the loading ramps the factor from 1 to 0 (a run of it once applied no
+    load at all, the last load being 0)."""
+    from pilegroup.studies.run.pipeline import solver_stages
+
+    d = tomllib.loads(bundled_text("single_pile"))
+    d["stages"][2] = {"name": "unloading", "kind": "load", "cap_load_kN": 0.0,
+                      "duration_day": 2.0}
+    d["stages"].append({"name": "rest", "kind": "consolidation"})
+    sc = scenario_from_dict(d)
+    assert sc.total_cap_load() == 500.0
+    factors = [st.load_factor for st in solver_stages(sc) if st.kind == "load"]
+    assert factors == [1.0, 0.0]
+    d["stages"][2]["cap_load_kN"] = 250.0
+    assert [st.load_factor for st in solver_stages(scenario_from_dict(d))
+            if st.kind == "load"] == [1.0, 0.5]

@@ -11,16 +11,17 @@ import os
 import subprocess
 import sys
 import time
+import tomllib
 
 import h5py
 import numpy as np
 import pytest
 
 from pilegroup.errors import ScenarioError
-from pilegroup.model.loader import parse_override
+from pilegroup.model.loader import apply_overrides, parse_override, scenario_from_dict
 from pilegroup.studies.bench import stability as bs
 from pilegroup.studies.bench.benchrun import Finished, run_isolated
-from pilegroup.studies.bench.small_pile import small_pile_scenario
+from pilegroup.studies.bench.small_pile import small_pile_scenario, small_pile_text
 
 #: The fast subset: a 1e-6 day step, the whole run in one step per stage, the lowest
 #: permeability the scenario accepts, a permeability it rejects, a load the stepper gives up on.
@@ -111,7 +112,14 @@ def test_cases_scale_the_scenario_values():
     assert values("load_x10") == {"stages[1].cap_load_kN": 10 * sc.total_cap_load()}
     groups = {c.group for c in cases.values()}
     assert groups == {"time step", "permeability", "stiffness", "load", "interface", "element",
-                      "capacity", "memory"}
+                      "soft soil", "capacity", "memory"}
+    ssc = values("ssc_unloading")
+    lam = 100.0 / (sc.layers[0].E_MPa * 1000.0 * math.log(2.0))
+    assert ssc["layers[0].lambda_star"] == pytest.approx(lam, rel=1e-5)
+    assert ssc["layers[0].mu_star"] == pytest.approx(lam / 25.0, rel=1e-5)
+    assert ssc["stages[2].cap_load_kN"] == 0.0
+    for name in ("ssc_load_x10", "mcc_unloading"):  # each a valid scenario
+        scenario_from_dict(apply_overrides(tomllib.loads(small_pile_text()), values(name)))
 
 
 def test_nonfinite_files_reads_numbers_not_words(tmp_path):
