@@ -9,6 +9,7 @@ page in a headless Chromium when one is installed.
 
 import base64
 import json
+import os
 import shutil
 import subprocess
 from html.parser import HTMLParser
@@ -210,12 +211,27 @@ def test_scenario_rows_name_each_layer_s_model_and_keys():
     assert key_value("output_days", [0, 0.5, 2]) == "output_days (0, 0.5, 2)"
 
 
+def _chromium() -> str:
+    """Debian's ``chromium``, installed with apt-get when it is missing (root, Debian only)."""
+    found = shutil.which("chromium") or shutil.which("chromium-browser")
+    if found:
+        return found
+    if shutil.which("apt-get") is None or os.geteuid() != 0:
+        pytest.skip("no `chromium` on PATH and no apt-get as root to install Debian's")
+    env = {**os.environ, "DEBIAN_FRONTEND": "noninteractive"}
+    for cmd in (["apt-get", "update", "-qq"],
+                ["apt-get", "install", "-y", "-qq", "--no-install-recommends", "chromium"]):
+        r = subprocess.run(cmd, capture_output=True, text=True, timeout=1200, env=env)
+        assert r.returncode == 0, f"{' '.join(cmd)}: {r.stderr[-2000:]}"
+    found = shutil.which("chromium")
+    assert found, "apt-get installed chromium, but it is not on PATH"
+    return found
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("small_pile_run", ["viscoplastic"], indirect=True)
 def test_a_headless_browser_renders_the_report(small_pile_run, tmp_path):
-    browser = shutil.which("chromium") or shutil.which("chromium-browser")
-    if browser is None:
-        pytest.skip("no `chromium` on PATH (Debian: apt-get install chromium)")
+    browser = _chromium()
     run = copy_run(small_pile_run, tmp_path / "run")
     write_handover(run)
     html = (run / REPORT_HTML).resolve()
