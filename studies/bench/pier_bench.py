@@ -1,12 +1,15 @@
-"""Benchmark of the whole pier job per mesh size and symmetry: cost against size.
+"""Benchmark of the whole pier job per scenario, mesh size and symmetry: cost against size.
 
-Each (size, symmetry) is one ``pilegroup run`` in its own process group (``mpirun -n RANKS``),
-so its peak memory is its own. The table: cells, unknowns, linear-solver preset, Newton and
-Krylov iterations (in all, and of the hardest Newton solve), LU factorisations, wall time (s)
-of the whole run (meshing, solve, plots), peak resident memory of the largest rank and of all
-ranks (MB, ``getrusage``), and the settlement at the last output time. Results go to
+Each (scenario, size, symmetry) is one ``pilegroup run`` in its own process group (``mpirun -n
+RANKS``), so its peak memory is its own. The table: cells, unknowns, linear-solver preset,
+Newton and Krylov iterations (in all, and of the hardest Newton solve), LU factorisations, wall
+time (s) of the whole run (meshing, solve, plots), peak resident memory of the largest rank and
+of all ranks (MB, ``getrusage``), and the settlement at the last output time. Results go to
 ``bench_pier.json`` and ``bench_pier.md`` in the output folder; failed runs are rows with their
-status and the last line of their error.
+status and the last line of their error. With several scenarios (e.g. ``pier667`` and
+``pier667_soft_soil``) they run one after the other and ``wall_ratio`` is each run's wall time
+over the first scenario's at the same size and symmetry: a cost compared within one run of the
+benchmark, on the same machine.
 """
 
 from __future__ import annotations
@@ -26,9 +29,9 @@ from pilegroup.studies.bench.benchrun import (
     write_table,
 )
 
-COLUMNS = ("h_m", "symmetry", "status", "cells", "dofs", "preset", "newton", "krylov",
-           "krylov_max", "factorisations", "wall_s", "peak_rss_rank_mb", "peak_rss_total_mb",
-           "settlement_mm")
+COLUMNS = ("scenario", "h_m", "symmetry", "status", "cells", "dofs", "preset", "newton",
+           "krylov", "krylov_max", "factorisations", "wall_s", "wall_ratio", "peak_rss_rank_mb",
+           "peak_rss_total_mb", "settlement_mm")
 
 
 def _command(scenario: str, h: float, symmetry: str, ranks: int, out: Path,
@@ -65,22 +68,29 @@ def _header(ranks: int, sets: Sequence[str] = ()) -> str:
             f"{ranks} MPI ranks" + "".join(f"; --set {kv}" for kv in sets))
 
 
-def bench_pier(scenario: str = "pier667", sizes: Sequence[float] = (1.0,),
+def bench_pier(scenarios: str | Sequence[str] = "pier667", sizes: Sequence[float] = (1.0,),
                symmetries: Sequence[str] = ("auto",), ranks: int = 2,
                out_dir: str | Path = "out/bench_pier", timeout: float | None = None,
                sets: Sequence[str] = ()) -> list[dict[str, Any]]:
-    """Run the job for every (size, symmetry); print and write the table; returns the rows.
+    """Run the job for every (scenario, size, symmetry); print and write the table.
 
     ``timeout``: seconds each run may take (``None``: no limit); a run killed at the timeout
     is a row with its status. ``sets``: ``KEY=VALUE`` scenario overrides of every run.
+    Returns the rows.
     """
+    names = [scenarios] if isinstance(scenarios, str) else list(scenarios)
     out = Path(out_dir)
-    rows = []
-    for h in sizes:
-        for sym in symmetries:
-            case = out / f"h{h:g}_{sym}"
-            fin = run_isolated(_command(scenario, h, sym, ranks, case, sets), timeout)
-            rows.append(_row(h, sym, case, fin))
-            print(json.dumps(rows[-1]), flush=True)
+    rows: list[dict[str, Any]] = []
+    first: dict[tuple[float, str], float] = {}
+    for name in names:
+        for h in sizes:
+            for sym in symmetries:
+                case = out / (f"h{h:g}_{sym}" if len(names) == 1 else f"{name}_h{h:g}_{sym}")
+                fin = run_isolated(_command(name, h, sym, ranks, case, sets), timeout)
+                row = {"scenario": name, **_row(h, sym, case, fin)}
+                base = first.setdefault((h, sym), row["wall_s"])
+                row["wall_ratio"] = round(row["wall_s"] / base, 2) if base else None
+                rows.append(row)
+                print(json.dumps(row), flush=True)
     write_table(out, "bench_pier", rows, COLUMNS, _header(ranks, sets))
     return rows

@@ -219,6 +219,10 @@ def _cmd_bench(args: argparse.Namespace) -> int:
         rows = bench_pier(args.scenario, args.sizes or [1.0], args.symmetry, args.ranks or 2,
                           args.out or "out/bench_pier", args.timeout, args.set or ())
         return 0 if all(r["status"] == "complete" for r in rows) else 1
+    if len(args.scenario) > 1:
+        raise ScenarioError("--scenario", " ".join(args.scenario),
+                            f"bench {args.what} runs one scenario (several: bench pier)", "-")
+    args.scenario = args.scenario[0]
     if args.what == "presets":
         from pilegroup.studies.bench.preset_bench import bench_presets
 
@@ -259,9 +263,10 @@ def _bench_arguments(p: argparse.ArgumentParser) -> None:
                    "(default: the scenario's)")
     p.add_argument("--out", default=None,
                    help="verification, pier, presets, floors, stability: output folder")
-    p.add_argument("--scenario", default="pier667",
-                   help="pier, presets, floors: the scenario to run (floors: under mpirun, in "
-                   "process)")
+    p.add_argument("--scenario", nargs="+", default=["pier667"],
+                   help="pier: the scenarios to run, one after the other (the table gives each "
+                   "run's wall time over the first scenario's at the same size and symmetry); "
+                   "presets, floors: the one scenario to run (floors: under mpirun, in process)")
     p.add_argument("--symmetry", nargs="*", default=["auto"],
                    help="pier, presets, meshing: the numerics.symmetry values to run (default: "
                    "auto, the part the geometry's symmetry allows)")
