@@ -3,10 +3,11 @@
 A run's figures and report speak of the scenario alone. Only where the scenario carries a
 ``[reference]`` do they set published values beside the run's: a settlement line, a total load,
 the layers and the early period the publication's findings are about, the times and gauge
-sections of its figures. Each value is optional; the ``source`` names where they are published.
-The bundled ``pier667`` scenarios carry the values of Li et al. (2019); no other scenario does,
-and nothing is drawn or written of a publication without one (docs/results.md, "Figures and
-report of a run").
+sections of its figures, a published mesh-size study (``[reference.mesh_study]``, which
+``pilegroup study mesh`` sets beside its own). Each value is optional; the ``source`` names where
+they are published. The bundled ``pier667`` scenarios carry the values of Li et al. (2019); no
+other scenario does, and nothing is drawn or written of a publication without one
+(docs/results.md, "Figures and report of a run").
 """
 
 from __future__ import annotations
@@ -15,6 +16,60 @@ from dataclasses import dataclass, field
 
 from pilegroup.errors import ScenarioError
 from pilegroup.validate import require_finite, require_non_negative, require_positive
+
+
+@dataclass(frozen=True)
+class MeshStudyReference:
+    """A published mesh-size study of the same model, set beside ``pilegroup study mesh``'s own.
+
+    The study's table, figures and report show it only where the scenario carries it.
+    """
+
+    sizes_m: tuple[float, ...] = field(metadata={"allowed": "each > 0, decreasing"})
+    """The element sizes at the pile surfaces (as ``numerics.mesh.size_m``), coarse to fine."""
+    settlements_m: tuple[float, ...] = field(metadata={"allowed": "each > 0, one per size"})
+    """The published settlement of the cap (down positive) at each size: beside ours in the
+    table and the settlement figure; its Richardson extrapolation from the three finest."""
+    elements: tuple[int, ...] = field(default=(), metadata={
+        "allowed": "each > 0, one per size"})
+    """The element count of the published model at each size (not set: not tabulated)."""
+    hours: tuple[float, ...] = field(default=(), metadata={
+        "unit": "h", "allowed": "each > 0, one per size"})
+    """The published computation time at each size (not set: no published series in the
+    error-against-time figure)."""
+    label: str = "published"
+    """How the study's figures name the published values in their legends."""
+    note: str = ""
+    """Where the study is published (section, table) and what its columns are: the report
+    quotes it."""
+
+    def __post_init__(self) -> None:
+        n = len(self.sizes_m)
+        if n == 0:
+            raise ScenarioError("sizes_m", list(self.sizes_m), "must list at least one size")
+        for i, h in enumerate(self.sizes_m):
+            require_positive(f"sizes_m[{i}]", h, "m")
+            if i and h >= self.sizes_m[i - 1]:
+                raise ScenarioError(f"sizes_m[{i}]", h, "must be smaller than the size before "
+                                    "it (coarse to fine)", "m")
+        for key, unit in (("settlements_m", "m"), ("elements", ""), ("hours", "h")):
+            values = getattr(self, key)
+            if key != "settlements_m" and not values:
+                continue
+            if len(values) != n:
+                raise ScenarioError(key, list(values), f"must give one value per size: {n} "
+                                    f"sizes_m, {len(values)} {key}")
+            for i, v in enumerate(values):
+                require_positive(f"{key}[{i}]", v, unit)
+        if not self.label.strip():
+            raise ScenarioError("label", self.label, "must name the published values")
+
+    def at(self, values: tuple[float, ...] | tuple[int, ...], h: float) -> float | None:
+        """The value of ``values`` (a column of this study) at size ``h``; None if not given."""
+        for size, v in zip(self.sizes_m, values, strict=False):
+            if abs(size - h) <= 1e-9 * max(abs(h), 1.0):
+                return v
+        return None
 
 
 @dataclass(frozen=True)
@@ -55,6 +110,9 @@ class Reference:
         "allowed": "section numbers from 1 to the number of outputs.gauge_depths_m"})
     """The gauge sections (numbered from 1, top down) whose histories the publication draws:
     the gauge history figures show them (not set: up to four sections spread over the pile)."""
+    mesh_study: MeshStudyReference | None = None
+    """A published mesh-size study of the same model (not set: ``pilegroup study mesh``
+    reports its own sizes alone)."""
 
     def __post_init__(self) -> None:
         if not self.source.strip():
@@ -92,4 +150,4 @@ def check_reference(ref: Reference | None, layers: int, sections: int) -> None:
                                     f"must be <= {count}: the scenario has {count} {what}")
 
 
-__all__ = ["Reference", "check_reference"]
+__all__ = ["MeshStudyReference", "Reference", "check_reference"]

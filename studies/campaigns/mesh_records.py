@@ -8,9 +8,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TypedDict
+from typing import NotRequired, TypedDict
 
 from pilegroup.model import Scenario
+from pilegroup.model.reference import MeshStudyReference
+
+#: The mesh sizes at the pile surfaces (m) a study runs unless told others (``--sizes``).
+DEFAULT_SIZES = (1.0, 0.8, 0.6, 0.3, 0.1)
 
 
 @dataclass(frozen=True)
@@ -46,15 +50,25 @@ class StudyInfo:
     memory_mb: float
     penalty_factor: float
 
+    @property
+    def published(self) -> MeshStudyReference | None:
+        """The published mesh study the scenario's ``[reference]`` carries, if any."""
+        ref = self.scenario.reference
+        return ref.mesh_study if ref is not None else None
+
 
 class SizeRow(TypedDict):
-    """One mesh size of the study (``mesh_study.csv``; the paper's Table 2 beside ours)."""
+    """One mesh size of the study (``mesh_study.csv``).
+
+    The published study's values only where the scenario carries one
+    (:attr:`StudyInfo.published`).
+    """
 
     h_m: float
     """Element size at the pile surfaces, m."""
-    paper_elements: int | None
-    paper_hours: float | None
-    paper_settlement_cm: float | None
+    published_elements: NotRequired[int | None]
+    published_hours: NotRequired[float | None]
+    published_settlement_cm: NotRequired[float | None]
     status: str
     """``complete``, ``failed: ...``, ``not run: ...`` or ``not in the study``."""
     cells: int | None

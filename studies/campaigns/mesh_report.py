@@ -1,20 +1,21 @@
-"""The report of a mesh study: the paper's Table 2 beside ours, GCI, cost, profiles, penalty.
+"""The report of a mesh study: our sizes (beside a published study), GCI, cost, profiles, penalty.
 
 Written by :func:`write_mesh_report` into the study's folder from the batch rows
 (:mod:`pilegroup.studies.batch.rows`) and the cases' run folders:
 
-* ``mesh_study.md``: the machine; the paper's Table 2 (Li et al. 2019, Section 5:
-  :data:`~pilegroup.studies.report.paper_values.PAPER_ELEMENTS`,
-  :data:`~pilegroup.studies.report.paper_values.PAPER_HOURS`,
-  :data:`~pilegroup.studies.report.paper_values.PAPER_SETTLEMENT_CM`) beside our cells, unknowns,
-  wall time, peak memory per rank and settlement per size; the sizes that did not run and why;
-  the Richardson extrapolation, observed order and GCI (:mod:`pilegroup.studies.campaigns.gci`)
-  of the cap settlement and of the centre pile's shaft friction (layer means, and the profile
-  interpolated at the gauge depths) at the last output time, from the three finest sizes that
-  ran; the same for the paper's settlements; the penalty check;
+* ``mesh_study.md``: the machine; our cells, unknowns, wall time, peak memory per rank and
+  settlement per size; the sizes that did not run and why; the Richardson extrapolation,
+  observed order and GCI (:mod:`pilegroup.studies.campaigns.gci`) of the cap settlement and of
+  the centre pile's shaft friction (layer means, and the profile interpolated at the gauge
+  depths) at the last output time, from the three finest sizes that ran; the penalty check;
 * ``mesh_study.csv`` (one row per size) and ``gci.csv`` (one row per quantity);
 * ``settlement_vs_h.png``, ``error_vs_time.png``, ``friction_profiles_sizes.png`` and
   ``relative_displacement_profiles_sizes.png``.
+
+A published mesh study appears only where the scenario's ``[reference]`` carries one
+(:class:`~pilegroup.model.reference.MeshStudyReference`, :attr:`StudyInfo.published`): its
+elements, hours and settlements beside ours in the table and the CSV, its settlements in the
+settlement figure and their own extrapolation in the report, its hours in the error figure.
 """
 
 from __future__ import annotations
@@ -34,11 +35,11 @@ from matplotlib.figure import Figure
 
 from pilegroup.errors import ScenarioError
 from pilegroup.fileio import atomic_path, write_text_atomic
+from pilegroup.model.reference import MeshStudyReference
 from pilegroup.studies.batch.rows import BatchRow
 from pilegroup.studies.campaigns.gci import GCIResult, gci
 from pilegroup.studies.campaigns.mesh_records import PenaltyRow, SizeRow, StudyCase, StudyInfo
-from pilegroup.studies.campaigns.mesh_report_md import SETTLEMENT, paper_gci, report_markdown
-from pilegroup.studies.report.paper_values import PAPER_ELEMENTS, PAPER_HOURS, PAPER_SETTLEMENT_CM
+from pilegroup.studies.campaigns.mesh_report_md import SETTLEMENT, published_gci, report_markdown
 from pilegroup.studies.results.rundata import load_run
 
 FIGURES = ("settlement_vs_h.png", "error_vs_time.png", "friction_profiles_sizes.png",
@@ -147,17 +148,28 @@ def _status(h: float, info: StudyInfo, by: dict[str, dict[str, Any]]) -> tuple[s
     return row["status"], row
 
 
+def _published_columns(pub: MeshStudyReference, h: float) -> dict[str, Any]:
+    """The published study's elements, hours and settlement (cm) at size ``h`` (None: absent)."""
+    settle = pub.at(pub.settlements_m, h)
+    return {"published_elements": pub.at(pub.elements, h),
+            "published_hours": pub.at(pub.hours, h),
+            "published_settlement_cm": None if settle is None else round(100.0 * settle, 10)}
+
+
 def size_table(info: StudyInfo, rows: Sequence[BatchRow]) -> list[SizeRow]:
-    """Per size (the paper's and ours, coarse to fine): the paper's Table 2 and our numbers."""
+    """Per size, coarse to fine: our numbers, and the published study's where there is one.
+
+    The sizes are the study's and, with a published study (:attr:`StudyInfo.published`), its
+    sizes too; without one the rows have no published columns.
+    """
     by = _by_name(rows)
-    sizes = sorted(set(PAPER_ELEMENTS) | {c.h for c in info.checks}, reverse=True)
+    pub = info.published
+    sizes = sorted({c.h for c in info.checks} | set(pub.sizes_m if pub else ()), reverse=True)
     out = []
     for h in sizes:
         status, row = _status(h, info, by)
         settle = (row.get("settlement_m") or [None])[-1] if row else None
-        out.append({"h_m": h, "paper_elements": PAPER_ELEMENTS.get(h),
-                    "paper_hours": PAPER_HOURS.get(h),
-                    "paper_settlement_cm": PAPER_SETTLEMENT_CM.get(h), "status": status,
+        out.append({"h_m": h, **(_published_columns(pub, h) if pub else {}), "status": status,
                     "cells": row.get("cells"), "symmetry": row.get("symmetry"),
                     "unknowns": row.get("unknowns"), "wall_s": row.get("wall_s"),
                     "peak_rss_mb_max": row.get("peak_rss_mb_max"),
@@ -208,8 +220,12 @@ def _done_series(done: Sequence[tuple[StudyCase, dict[str, Any], dict[str, float
 
 
 def settlement_figure(done: Sequence[tuple[StudyCase, dict[str, Any], dict[str, float]]],
-                      g: GCIResult | None, name: str) -> Figure:
-    """Settlement at the last output time against h; extrapolated value; the paper's Table 2."""
+                      g: GCIResult | None, name: str,
+                      published: MeshStudyReference | None = None) -> Figure:
+    """Settlement at the last output time against h, with its extrapolated value.
+
+    A published study's settlements on a second axis where the scenario carries one.
+    """
     fig = Figure(figsize=(7.5, 4.8))
     ax = fig.subplots()
     h, w = _done_series(done)
@@ -218,23 +234,29 @@ def settlement_figure(done: Sequence[tuple[StudyCase, dict[str, Any], dict[str, 
         ax.axhline(100.0 * g.phi_ext, color="C0", ls="--", lw=0.9,
                    label=f"ours extrapolated, p = {g.p:.2f}, GCI = {100 * g.gci_fine21:.2g} %")
     ax.set_xlabel("mesh size at the pile surface h (m)")
-    ax.set_ylabel("our settlement (cm)", color="C0")
-    ax2 = ax.twinx()
-    ph = sorted(PAPER_SETTLEMENT_CM)
-    ax2.plot(ph, [PAPER_SETTLEMENT_CM[x] for x in ph], "s:", color="C3",
-             label="paper Table 2 (Pier 667, ABAQUS)")
-    ax2.set_ylabel("paper's settlement (cm)", color="C3")
-    lines = ax.get_legend_handles_labels()
-    lines2 = ax2.get_legend_handles_labels()
-    ax.legend(lines[0] + lines2[0], lines[1] + lines2[1], fontsize="small", loc="best")
+    handles, labels = ax.get_legend_handles_labels()
+    if published is not None:
+        ax.set_ylabel("our settlement (cm)", color="C0")
+        ax2 = ax.twinx()
+        ax2.plot(published.sizes_m, [100.0 * s for s in published.settlements_m], "s:",
+                 color="C3", label=published.label)
+        ax2.set_ylabel("published settlement (cm)", color="C3")
+        more = ax2.get_legend_handles_labels()
+        handles, labels = handles + more[0], labels + more[1]
+    else:
+        ax.set_ylabel("settlement (cm)")
+    ax.legend(handles, labels, fontsize="small", loc="best")
     ax.grid(alpha=0.3)
     ax.set_title("Settlement at the last output time against mesh size")
     return fig
 
 
 def error_figure(done: Sequence[tuple[StudyCase, dict[str, Any], dict[str, float]]],
-                 g: GCIResult | None) -> Figure:
-    """Relative error against the extrapolated value versus computation time, ours and paper's."""
+                 g: GCIResult | None, published: MeshStudyReference | None = None) -> Figure:
+    """Relative error against the extrapolated value versus computation time.
+
+    Ours, and a published study's (against its own extrapolation) where it gives its hours.
+    """
     fig = Figure(figsize=(7.0, 4.8))
     ax = fig.subplots()
     series = []
@@ -242,10 +264,11 @@ def error_figure(done: Sequence[tuple[StudyCase, dict[str, Any], dict[str, float
         series.append(("ours (wall time of the run)", "o-", [
             (r["wall_s"] / 3600.0, abs(q[SETTLEMENT] - g.phi_ext) / abs(g.phi_ext), c.h)
             for c, r, q in done if SETTLEMENT in q and r.get("wall_s")]))
-    pg = paper_gci()
-    series.append(("paper Table 2 (its own extrapolation)", "s:", [
-        (PAPER_HOURS[h], abs(PAPER_SETTLEMENT_CM[h] - pg.phi_ext) / abs(pg.phi_ext), h)
-        for h in PAPER_HOURS]))
+    pg = published_gci(published) if published is not None and published.hours else None
+    if pg is not None and pg.defined:
+        series.append((f"{published.label} (its own extrapolation)", "s:", [
+            (hours, abs(w - pg.phi_ext) / abs(pg.phi_ext), h) for h, w, hours in
+            zip(published.sizes_m, published.settlements_m, published.hours, strict=True)]))
     for label, style, pts in series:
         pts = sorted(p for p in pts if p[0] > 0 and p[1] > 0)
         if not pts:
@@ -257,7 +280,8 @@ def error_figure(done: Sequence[tuple[StudyCase, dict[str, Any], dict[str, float
     ax.set_xlabel("computation time (hours)")
     ax.set_ylabel("|settlement - extrapolated| / extrapolated (%)")
     ax.grid(alpha=0.3, which="both")
-    ax.legend(fontsize="small")
+    if ax.get_legend_handles_labels()[0]:
+        ax.legend(fontsize="small")
     ax.set_title("Discretisation error against cost")
     return fig
 
@@ -279,7 +303,8 @@ def profiles_figure(done: Sequence[tuple[StudyCase, dict[str, Any], dict[str, fl
     ax.set_ylabel("depth below ground surface (m)")
     ax.set_title("Centre pile at the last output time, by mesh size")
     ax.grid(alpha=0.3)
-    ax.legend(fontsize="small")
+    if ax.get_legend_handles_labels()[0]:
+        ax.legend(fontsize="small")
     return fig
 
 
@@ -290,8 +315,8 @@ def write_mesh_report(out: Path, info: StudyInfo, rows: Sequence[BatchRow]) -> l
     table = gci_table(done)
     g = table.get(SETTLEMENT)
     paths = [
-        _save(settlement_figure(done, g, info.scenario.name), out / FIGURES[0]),
-        _save(error_figure(done, g), out / FIGURES[1]),
+        _save(settlement_figure(done, g, info.scenario.name, info.published), out / FIGURES[0]),
+        _save(error_figure(done, g, info.published), out / FIGURES[1]),
         _save(profiles_figure(done, "shaft_friction_kPa", 1.0, "shaft friction (kPa)"),
               out / FIGURES[2]),
         _save(profiles_figure(done, "relative_displacement_m", 1000.0,
@@ -305,5 +330,5 @@ def write_mesh_report(out: Path, info: StudyInfo, rows: Sequence[BatchRow]) -> l
     return paths
 
 
-__all__ = ["FIGURES", "final_quantities", "gci_table", "penalty_check", "size_results",
-           "size_table", "write_mesh_report"]
+__all__ = ["FIGURES", "error_figure", "final_quantities", "gci_table", "penalty_check",
+           "settlement_figure", "size_results", "size_table", "write_mesh_report"]

@@ -1,4 +1,8 @@
-"""The text of ``mesh_study.md`` (the numbers are gathered by :mod:`.mesh_report`)."""
+"""The text of ``mesh_study.md`` (the numbers are gathered by :mod:`.mesh_report`).
+
+A published mesh study is written of only where the scenario's ``[reference]`` carries one
+(:attr:`~pilegroup.studies.campaigns.mesh_records.StudyInfo.published`).
+"""
 
 from __future__ import annotations
 
@@ -6,19 +10,23 @@ import math
 from collections.abc import Sequence
 from typing import Any
 
+from pilegroup.model.reference import MeshStudyReference
 from pilegroup.studies.campaigns.gci import GCIResult, gci
 from pilegroup.studies.campaigns.mesh_records import StudyInfo
-from pilegroup.studies.report.paper_values import PAPER_SETTLEMENT_CM
 
 #: Relative change (of the value) above which the answer is said to depend on the penalty.
 PENALTY_TOL = 0.01
 SETTLEMENT = "settlement_m"
 
 
-def paper_gci() -> GCIResult:
-    """The GCI of the paper's settlements (cm) from its three finest sizes (0.6, 0.3, 0.1 m)."""
-    h = (0.1, 0.3, 0.6)
-    return gci(h, (PAPER_SETTLEMENT_CM[0.1], PAPER_SETTLEMENT_CM[0.3], PAPER_SETTLEMENT_CM[0.6]))
+def published_gci(pub: MeshStudyReference) -> GCIResult | None:
+    """The GCI of a published study's settlements (m) from its three finest sizes.
+
+    None with fewer than three sizes.
+    """
+    if len(pub.sizes_m) < 3:
+        return None
+    return gci(tuple(pub.sizes_m[:-4:-1]), tuple(pub.settlements_m[:-4:-1]))
 
 
 def _f(x: Any, spec: str = ".4g") -> str:
@@ -34,22 +42,33 @@ def display(key: str) -> tuple[str, float]:
     return key.replace("friction_kPa[", "shaft friction (kPa), ").rstrip("]"), 1.0
 
 
+def _published_intro(source: str, pub: MeshStudyReference) -> str:
+    """Where the published columns come from: the reference's source and the study's note."""
+    what = f": {pub.note}" if pub.note else ""
+    return (f"The published columns ({pub.label}) are the scenario's `[reference.mesh_study]` "
+            f"from {source}{what}. ")
+
+
 def _size_section(info: StudyInfo, sizes: list[dict[str, Any]]) -> list[str]:
     t_last = next((s["t_last_day"] for s in sizes if s["t_last_day"] is not None), None)
-    lines = ["## The paper's Table 2 beside ours", "",
-             "| h (m) | paper: elements | paper: time (h) | paper: settlement (cm) | ours: cells "
-             "(model run) | unknowns | wall (s) | peak memory per rank (MB) | settlement (cm) at"
-             f" t = {_f(t_last)} d | status |", "|" + "---|" * 10]
+    pub = info.published
+    head = ("| h (m) | published: elements | published: time (h) | published: settlement (cm) "
+            if pub else "| h (m) ")
+    lines = ["## The published mesh study beside ours" if pub else "## The sizes", "",
+             head + "| ours: cells (model run) | unknowns | wall (s) | peak memory per rank (MB) "
+             f"| settlement (cm) at t = {_f(t_last)} d | status |",
+             "|" + "---|" * (10 if pub else 7)]
     for s in sizes:
         cells = _f(s["cells"], ",") + (f" ({s['symmetry']})" if s.get("symmetry") else "")
-        lines.append(f"| {s['h_m']:g} | {_f(s['paper_elements'], ',')} | "
-                     f"{_f(s['paper_hours'])} | {_f(s['paper_settlement_cm'])} | "
+        published = (f"{_f(s['published_elements'], ',')} | {_f(s['published_hours'])} | "
+                     f"{_f(s['published_settlement_cm'])} | " if pub else "")
+        lines.append(f"| {s['h_m']:g} | {published}"
                      f"{cells if s['cells'] else '–'} | {_f(s['unknowns'], ',')} | "
                      f"{_f(s['wall_s'], '.1f')} | {_f(s['peak_rss_mb_max'], '.0f')} | "
                      f"{_f(s['settlement_cm'], '.4f')} | {s['status']} |")
-    lines += ["", "The paper's columns are its Table 2 (Li et al. 2019, Section 5): elements of "
-              "its whole-pier ABAQUS model, computation time on a machine it does not name, "
-              "settlement of the pile foundation after 317 days. Ours: hexahedra of the model "
+    ref = info.scenario.reference
+    intro = _published_intro(ref.source, pub) if pub is not None and ref is not None else ""
+    lines += ["", intro + "Ours: hexahedra of the model "
               "that ran (a symmetry-reduced model holds a half or a quarter of the whole), "
               "unknowns, wall time of the case (meshing, solve, outputs), the largest peak "
               "resident memory over the case's ranks, cap settlement at the last output time "
@@ -61,7 +80,7 @@ def _size_section(info: StudyInfo, sizes: list[dict[str, Any]]) -> list[str]:
     return lines
 
 
-def _gci_section(table: dict[str, GCIResult]) -> list[str]:
+def _gci_section(table: dict[str, GCIResult], pub: MeshStudyReference | None) -> list[str]:
     lines = ["## Convergence: Richardson extrapolation and grid convergence index", ""]
     if not table:
         return lines + ["Needs three sizes that ran to completion; fewer did.", ""]
@@ -80,11 +99,13 @@ def _gci_section(table: dict[str, GCIResult]) -> list[str]:
                      f"{_f(sc * g.phi[2])} | {_f(g.p, '.3g')} | {_f(sc * g.phi_ext)} | "
                      f"{_f(100 * g.e_a21, '.3g')} % | {_f(100 * g.e_ext21, '.3g')} % | "
                      f"{_f(100 * g.gci_fine21, '.3g')} % | {g.note} |")
-    pg = paper_gci()
-    lines += ["", f"The same for the paper's settlements (0.6, 0.3, 0.1 m): p = {pg.p:.3g}, "
-              f"extrapolated {pg.phi_ext:.4g} cm, GCI_fine21 = {100 * pg.gci_fine21:.3g} %.",
-              "", "![settlement against h](settlement_vs_h.png)", ""]
-    return lines
+    pg = published_gci(pub) if pub is not None else None
+    if pg is not None and pg.defined:
+        sizes = ", ".join(f"{h:g}" for h in reversed(pg.h))
+        lines += ["", f"The same for the published settlements ({pub.label}; {sizes} m): "
+                  f"p = {pg.p:.3g}, extrapolated {100 * pg.phi_ext:.4g} cm, GCI_fine21 = "
+                  f"{100 * pg.gci_fine21:.3g} %."]
+    return lines + ["", "![settlement against h](settlement_vs_h.png)", ""]
 
 
 def _penalty_section(info: StudyInfo, checks: Sequence[dict[str, Any]]) -> list[str]:
@@ -125,12 +146,14 @@ def report_markdown(info: StudyInfo, sizes: list[dict[str, Any]], table: dict[st
              "Every case's run folder is `h<size>/` (penalty cases `h<size>_penalty_x<factor>/`);"
              " the per-case numbers at every output time are in `batch.csv` and `batch.json`, "
              "the per-size numbers of this report in `mesh_study.csv` and `gci.csv`.", ""]
+    pub = info.published
     lines += _size_section(info, sizes)
-    lines += _gci_section(table)
+    lines += _gci_section(table, pub)
+    theirs = (f", and the published study's ({pub.label}: its hours, against the extrapolation "
+              "of its own three finest sizes)" if pub is not None and pub.hours else "")
     lines += ["## Error against computation time", "",
               "Relative difference of the settlement to the extrapolated value against the "
-              "computation time, ours (wall time of each case) and the paper's (hours of its "
-              "Table 2, against the extrapolation of its own three finest sizes).", "",
+              f"computation time: ours (wall time of each case){theirs}.", "",
               "![error against time](error_vs_time.png)", "",
               "## Centre-pile profiles at the last output time", "",
               "![shaft friction](friction_profiles_sizes.png)",
@@ -139,4 +162,4 @@ def report_markdown(info: StudyInfo, sizes: list[dict[str, Any]], table: dict[st
     return "\n".join(lines)
 
 
-__all__ = ["PENALTY_TOL", "SETTLEMENT", "display", "paper_gci", "report_markdown"]
+__all__ = ["PENALTY_TOL", "SETTLEMENT", "display", "published_gci", "report_markdown"]

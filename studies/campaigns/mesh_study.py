@@ -9,7 +9,8 @@ queue, resume). The interface's normal stiffness is ``normal_stiffness_factor * 
 (:func:`pilegroup.studies.run.pipeline.interface_law`), so it grows as the mesh is refined; the
 coarsest and the finest sizes are also run with the factor times ``penalty_factor`` (cases
 ``h<size>_penalty_x<factor>``) to show whether the answer depends on it. World rank 0 then writes
-the report (:mod:`pilegroup.studies.campaigns.mesh_report`).
+the report (:mod:`pilegroup.studies.campaigns.mesh_report`), with a published mesh study beside
+ours only where the scenario's ``[reference]`` carries one.
 
 Memory estimate: the one each run makes of itself before meshing (cells and unknowns of the
 model part, the preset it will use, that preset family's fit of measured peaks;
@@ -34,15 +35,12 @@ from pilegroup.model import Scenario, load_scenario
 from pilegroup.studies.batch.batch_plan import BatchCase, BatchPlan
 from pilegroup.studies.batch.execute import run_batch
 from pilegroup.studies.batch.rows import BatchRow
-from pilegroup.studies.campaigns.mesh_records import SizeCheck, StudyCase, StudyInfo
+from pilegroup.studies.campaigns.mesh_records import DEFAULT_SIZES, SizeCheck, StudyCase, StudyInfo
 from pilegroup.studies.campaigns.mesh_report import write_mesh_report
-from pilegroup.studies.report.paper_values import PAPER_HOURS
 from pilegroup.studies.run.memory_check import run_estimate
 
 SIZE_KEY = "numerics.mesh.size_m"
 PENALTY_KEY = "interface.normal_stiffness_factor"
-#: The paper's five mesh sizes (m), the default of the study.
-PAPER_SIZES = tuple(sorted(PAPER_HOURS, reverse=True))
 
 def machine_memory_mb() -> float:
     """Physical memory of this machine, MB."""
@@ -121,6 +119,6 @@ def run_mesh_study(source: str, sets: Mapping[str, Any], sizes: Sequence[float],
     return failed
 
 
-__all__ = ["PAPER_SIZES", "SizeCheck", "StudyCase", "StudyInfo", "check_size",
+__all__ = ["DEFAULT_SIZES", "SizeCheck", "StudyCase", "StudyInfo", "check_size",
            "machine_memory_mb", "run_mesh_study",
            "study_cases", "study_plan"]

@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Any
 from pilegroup.errors import ScenarioError
 from pilegroup.model.loader import parse_override
 from pilegroup.studies.batch.rows import BatchRow
-from pilegroup.studies.report.paper_values import PAPER_HOURS
+from pilegroup.studies.campaigns.mesh_records import DEFAULT_SIZES
 
 if TYPE_CHECKING:
     from pilegroup.studies.batch.execute import BatchResult
@@ -46,10 +46,12 @@ COMBINATIONS_DESCRIPTION = (
 STUDY_DESCRIPTION = (
     "Mesh-sensitivity study: a batch over numerics.mesh.size_m (--sizes), the coarsest and "
     "finest sizes again with the interface normal penalty x --penalty-factor, and a report "
-    "(mesh_study.md, PNG figures, mesh_study.csv, gci.csv): the paper's Table 2 beside ours, "
-    "Richardson extrapolation, observed order and GCI (Celik et al. 2008), error against time, "
-    "centre-pile profiles for every size, the penalty check; sizes that are invalid or would not "
-    "fit the machine's memory are reported, not run.")
+    "(mesh_study.md, PNG figures, mesh_study.csv, gci.csv): cells, unknowns, wall time, memory "
+    "and settlement per size, Richardson extrapolation, observed order and GCI (Celik et al. "
+    "2008), error against time, centre-pile profiles for every size, the penalty check; sizes "
+    "that are invalid or would not fit the machine's memory are reported, not run. A published "
+    "mesh study is set beside ours only where the scenario carries one ([reference.mesh_study], "
+    "docs/scenario.md).")
 
 
 def memory_size(text: str) -> float:
@@ -187,13 +189,13 @@ def _cmd_study_mesh(args: argparse.Namespace) -> int:
 def study_arguments(p: argparse.ArgumentParser) -> None:
     """Arguments of ``pilegroup study``."""
     sub = p.add_subparsers(dest="study", required=True, metavar="STUDY")
-    m = sub.add_parser("mesh", help="mesh-sensitivity study with GCI and the paper's Table 2",
-                       description=STUDY_DESCRIPTION)
+    m = sub.add_parser("mesh", help="mesh-sensitivity study with GCI (beside a published one "
+                       "where the scenario carries it)", description=STUDY_DESCRIPTION)
     m.add_argument("scenario", help="scenario TOML file or bundled name, e.g. pier667")
     m.add_argument("--sizes", type=float, nargs="+", metavar="H",
-                   default=sorted(PAPER_HOURS, reverse=True),
-                   help="element sizes at the pile surfaces in m (default: the paper's "
-                   "1.0 0.8 0.6 0.3 0.1)")
+                   default=list(DEFAULT_SIZES),
+                   help="element sizes at the pile surfaces in m (default: "
+                   f"{' '.join(f'{h:g}' for h in DEFAULT_SIZES)})")
     m.add_argument("--out", help="study folder (default: out/mesh_study_<scenario>)")
     m.add_argument("--set", action="append", metavar="KEY=VALUE",
                    help="set a scenario key in every case (as pilegroup run --set); repeatable")

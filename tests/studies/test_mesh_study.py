@@ -1,4 +1,9 @@
-"""``pilegroup study mesh``: size checks, the cases, and the report against batch.csv."""
+"""``pilegroup study mesh``: size checks, the cases, and the report against batch.csv.
+
+A published mesh study appears in the report, its CSV and its figures only where the scenario's
+``[reference]`` carries one (``pier667``: the paper's Table 2); the report tests use made-up
+batch rows, no runs.
+"""
 
 import csv
 import os
@@ -11,14 +16,21 @@ import pytest
 from pilegroup.geometry.adapter import resolve_geometry
 from pilegroup.model import load_scenario
 from pilegroup.studies.campaigns.gci import gci
+from pilegroup.studies.campaigns.mesh_records import StudyInfo
+from pilegroup.studies.campaigns.mesh_report import (
+    error_figure,
+    settlement_figure,
+    size_results,
+    write_mesh_report,
+)
 from pilegroup.studies.campaigns.mesh_study import (
     PENALTY_KEY,
     SizeCheck,
+    StudyCase,
     check_size,
     study_cases,
     study_plan,
 )
-from pilegroup.studies.report.paper_values import PAPER_ELEMENTS, PAPER_HOURS, PAPER_SETTLEMENT_CM
 from pilegroup.studies.run.memory_check import estimated_peak_mb, run_estimate
 
 BIN = Path(sys.executable).parent
@@ -111,14 +123,87 @@ def test_study_report_agrees_with_the_batch(tmp_path, small_pile):
     assert {f"friction_kPa[gauge {z:g} m]" for z in (1, 4, 8, 11.5)} <= set(table)
     sizes = {float(row["h_m"]): row for row in _csv(out / "mesh_study.csv")}
     assert sizes[9.0]["status"].startswith("not run: invalid: numerics.mesh.")
-    assert sizes[0.8]["status"] == "not in the study" and sizes[0.3]["status"] == "complete"
-    for x in PAPER_ELEMENTS:
-        assert int(sizes[x]["paper_elements"]) == PAPER_ELEMENTS[x]
-        assert float(sizes[x]["paper_hours"]) == PAPER_HOURS[x]
-        assert float(sizes[x]["paper_settlement_cm"]) == PAPER_SETTLEMENT_CM[x]
+    assert set(sizes) == {9.0, 1.0, 0.6, 0.3} and sizes[0.3]["status"] == "complete"
+    assert not any(k.startswith("published") for k in sizes[0.3])  # no [reference]
     assert float(sizes[0.3]["settlement_cm"]) == pytest.approx(
         100 * float(batch["h0.3"]["settlement_m@2d"]), rel=1e-12)
     assert int(sizes[0.3]["unknowns"]) == int(batch["h0.3"]["unknowns"])
     text = (out / "mesh_study.md").read_text()
     assert "* h = 9 m: not run: invalid:" in text and "## Interface normal penalty" in text
     assert "the answer depends on it" in text or "the answer does not depend on it" in text
+    assert not {"paper", "table 2", "abaqus", "published"} & _words(text)
+
+
+#: Made-up settlements (m) and layer-1 friction (kPa) at the last output time, by size.
+FAKE = {1.0: (0.01389, 1.14), 0.6: (0.013928, 1.144), 0.3: (0.013955, 1.158),
+        0.1: (0.013947, 1.16)}
+
+
+def _words(text: str) -> set[str]:
+    """Which of the words that name a published study ``text`` holds (lower case)."""
+    low = text.lower()
+    return {w for w in ("paper", "table 2", "abaqus", "published", "li et al") if w in low}
+
+
+def _fake_study(tmp_path, scenario, sizes=(1.0, 0.6, 0.3, 0.1)):
+    """A study's records and made-up batch rows (complete cases, no run folders)."""
+    cases = tuple(StudyCase(f"h{h:g}", h) for h in sizes)
+    rows = [{"name": c.name, "status": "complete", "cells": 1000 * (i + 1), "symmetry": "quarter",
+             "unknowns": 4000 * (i + 1), "wall_s": 60.0 * (i + 1), "peak_rss_mb_max": 900.0,
+             "output_days": [0.0, 317.0], "settlement_m": [0.0, FAKE[c.h][0]],
+             "layer_friction_kPa": {"1 clay": [0.0, FAKE[c.h][1]]},
+             "run_dir": str(tmp_path / "no_run" / c.name)} for i, c in enumerate(cases)]
+    info = StudyInfo(scenario, tuple(SizeCheck(h, True) for h in sizes), cases, 2, 1, 8192.0,
+                     10.0)
+    return info, rows
+
+
+def _figure_text(fig) -> str:
+    """Every title, axis label and legend entry of ``fig``."""
+    parts = []
+    for ax in fig.axes:
+        parts += [ax.get_title(), ax.get_xlabel(), ax.get_ylabel()]
+        legend = ax.get_legend()
+        if legend is not None:
+            parts += [t.get_text() for t in legend.get_texts()]
+    return "\n".join(parts)
+
+
+def test_a_study_without_a_reference_says_nothing_of_a_publication(tmp_path, small_pile):
+    sc = load_scenario(small_pile)
+    assert sc.reference is None
+    info, rows = _fake_study(tmp_path, sc)
+    write_mesh_report(tmp_path / "study", info, rows)
+    text = (tmp_path / "study" / "mesh_study.md").read_text()
+    assert "## The sizes" in text and "GCI_fine21" in text and not _words(text)
+    table = _csv(tmp_path / "study" / "mesh_study.csv")
+    assert [float(r["h_m"]) for r in table] == [1.0, 0.6, 0.3, 0.1]  # the study's sizes only
+    assert not _words(",".join(table[0]))
+    done = size_results(info, rows)
+    for fig in (settlement_figure(done, None, sc.name, info.published),
+                error_figure(done, None, info.published)):
+        assert not _words(_figure_text(fig))
+
+
+def test_pier667_sets_the_papers_table_2_beside_ours(tmp_path):
+    sc = load_scenario("pier667")
+    pub = sc.reference.mesh_study
+    assert pub.sizes_m == (1.0, 0.8, 0.6, 0.3, 0.1) and pub.settlements_m[3] == 0.303
+    info, rows = _fake_study(tmp_path, sc)
+    write_mesh_report(tmp_path / "study", info, rows)
+    text = (tmp_path / "study" / "mesh_study.md").read_text()
+    assert {"paper", "table 2", "abaqus", "published"} <= _words(text)
+    assert "| 0.8 | 63,553 | 0.9 | 35.2 | – |" in text  # the paper's size we did not run
+    assert "| 0.3 | 105,522 | 6.8 | 30.3 | 3,000 (quarter) |" in text
+    # the paper's own extrapolation from 0.6, 0.3 and 0.1 m
+    assert "published settlements (paper Table 2 (Pier 667, ABAQUS); 0.6, 0.3, 0.1 m)" in text
+    assert "extrapolated 30.2 cm" in text
+    table = {float(r["h_m"]): r for r in _csv(tmp_path / "study" / "mesh_study.csv")}
+    assert set(table) == set(pub.sizes_m) and table[0.8]["status"] == "not in the study"
+    assert int(table[1.0]["published_elements"]) == 57108
+    assert float(table[0.1]["published_hours"]) == 42.6
+    assert float(table[0.6]["published_settlement_cm"]) == pytest.approx(34.6, rel=1e-12)
+    done = size_results(info, rows)
+    for fig in (settlement_figure(done, None, sc.name, info.published),
+                error_figure(done, None, info.published)):
+        assert "paper Table 2 (Pier 667, ABAQUS)" in _figure_text(fig)
