@@ -19,7 +19,13 @@ in a separate gmsh model, by :func:`far_field`:
   the outline, with each of :data:`FAR_FIELD_ALGORITHMS` and Blossom recombination;
   recombination may leave pairs of triangles, which :func:`~pilegroup.geometry.quadfix.
   all_quads` turns into quadrilaterals; the all-quad mesh with the best minimum scaled
-  Jacobian is kept.
+  Jacobian is kept;
+* when no algorithm gives one, the block sides are split instead at the size the grading
+  reaches at their distance from the structured region (at most ``h_far``) and the algorithms
+  are tried again. Sides split far coarser than the grading asks there can leave gmsh a
+  boundary it fills badly: an 8 x 2 group of mixed piles in a 96 m x 76 m block (two 48 m
+  edges a side where the grading reaches 19 m) got a Delaunay mesh with a triangle turned
+  over by the smoothing, and frontal meshes without a node inside (fans of 132 triangles).
 
 :func:`build_plan` then records each image of the part in a
 :class:`~pilegroup.geometry.plan.PlanView`: the structured cells, the outline split into the
@@ -101,8 +107,12 @@ def _chain(pv: PlanView, a: tuple[float, float], b: tuple[float, float],
 
 
 def _boundary(pv: PlanView, spec: GeometrySpec, planes: Sequence[str],
-              curves: list[int]) -> list[Segment]:
-    """The far field's boundary segments: outline ``curves`` (split), planes, block sides."""
+              curves: list[int], graded: bool = False) -> list[Segment]:
+    """The far field's boundary segments: outline ``curves`` (split), planes, block sides.
+
+    The block sides are split at ``h_far``, or (``graded``) at the size the grading reaches
+    at each side's distance from the structured region (at most ``h_far``).
+    """
     segs = [(pv.curves[t].p, pv.curves[t].q) for c in curves for t in pv.split(c)]
     bx, by = spec.block.size_x / 2, spec.block.size_y / 2
     bx0, by0 = (0.0 if "x" in planes else -bx), (0.0 if "y" in planes else -by)
@@ -119,12 +129,16 @@ def _boundary(pv: PlanView, spec: GeometrySpec, planes: Sequence[str],
                 else [(q**k - 1.0) / (q**n - 1.0) for k in range(n + 1)])
         segs += _chain(pv, a, b, frac)
     corners = [(bx0, by0), (bx, by0), (bx, by), (bx0, by)]
-    sides = [(corners[k], corners[(k + 1) % 4]) for k in range(4)
+    size = [spec.sizing.h_far] * 4
+    if graded:  # each side's distance from the structured region (sides y-, x+, y+, x-)
+        size = [min(spec.sizing.h_far, outline_edge(spec) + (spec.sizing.growth - 1.0) * gap)
+                for gap in (by + sy0, bx - sx1, by - sy1, bx + sx0)]
+    sides = [(corners[k], corners[(k + 1) % 4], size[k]) for k in range(4)
              if not ((k == 0 and "y" in planes) or (k == 3 and "x" in planes))]
-    counts = [max(2, math.ceil(math.dist(a, b) / spec.sizing.h_far - 1e-9)) for a, b in sides]
+    counts = [max(2, math.ceil(math.dist(a, b) / h - 1e-9)) for a, b, h in sides]
     if (len(segs) + sum(counts)) % 2:  # an odd boundary leaves a triangle in any quad mesh
-        counts[max(range(len(sides)), key=lambda k: math.dist(*sides[k]))] += 1
-    for (a, b), n in zip(sides, counts, strict=True):
+        counts[max(range(len(sides)), key=lambda k: math.dist(*sides[k][:2]))] += 1
+    for (a, b, _), n in zip(sides, counts, strict=True):
         segs += _chain(pv, a, b, [k / n for k in range(n + 1)])
     return segs
 
@@ -202,8 +216,13 @@ def _quad_mesh(surface: int) -> tuple[np.ndarray, np.ndarray, int]:
     return all_quads(xyz.reshape(-1, 3)[:, :2], elements)
 
 
-def _mesh(pv: PlanView, spec: GeometrySpec, segs: list[Segment], n_outline: int) -> FarField:
-    """Mesh the far field bounded by ``segs`` in a gmsh model of its own (then removed)."""
+def _mesh(pv: PlanView, spec: GeometrySpec, segs: list[Segment],
+          n_outline: int) -> FarField | None:
+    """Mesh the far field bounded by ``segs`` in a gmsh model of its own (then removed).
+
+    The all-quadrilateral mesh of the algorithm with the best minimum scaled Jacobian, or None
+    when no algorithm gives one.
+    """
     gmsh.model.add("far_field")
     try:
         surface, curves = _surface(pv, segs, n_outline)
@@ -223,26 +242,29 @@ def _mesh(pv: PlanView, spec: GeometrySpec, segs: list[Segment], n_outline: int)
                 best = FarField(xy, quads, alg, q, pairs)
     finally:
         gmsh.model.remove()
-    if best is None:
-        raise ScenarioError("numerics.mesh.growth", spec.sizing.growth,
-                            "the far field cannot be meshed with convex quadrilaterals at this "
-                            f"sizing (every gmsh algorithm {FAR_FIELD_ALGORITHMS} failed): change "
-                            "numerics.mesh.growth, far_field_size_m or size_m", "-")
     return best
 
 
 def far_field(spec: GeometrySpec) -> FarField:
     """The all-quadrilateral far-field mesh of ``spec``'s part (see the module docstring).
 
-    Raises :class:`~pilegroup.errors.ScenarioError` naming ``numerics.mesh.growth`` when no
-    algorithm gives convex quadrilaterals only.
+    The block sides split at ``h_far`` first; when no algorithm gives convex quadrilaterals,
+    split at the size the grading reaches there. Raises
+    :class:`~pilegroup.errors.ScenarioError` naming ``numerics.mesh.growth`` when neither does.
     """
     planes = spec.symmetry_planes()
-    pv = PlanView(max(spec.block.size_x, spec.block.size_y))
-    structured_cells(pv, spec, planes, circumferential_divisions(spec))
-    curves = outline(pv, 0, planes)
-    n_outline = sum(len(pv.split(c)) for c in curves)
-    return _mesh(pv, spec, _boundary(pv, spec, planes, curves), n_outline)
+    for graded in (False, True):
+        pv = PlanView(max(spec.block.size_x, spec.block.size_y))
+        structured_cells(pv, spec, planes, circumferential_divisions(spec))
+        curves = outline(pv, 0, planes)
+        n_outline = sum(len(pv.split(c)) for c in curves)
+        far = _mesh(pv, spec, _boundary(pv, spec, planes, curves, graded), n_outline)
+        if far is not None:
+            return far
+    raise ScenarioError("numerics.mesh.growth", spec.sizing.growth,
+                        "the far field cannot be meshed with convex quadrilaterals at this "
+                        f"sizing (every gmsh algorithm {FAR_FIELD_ALGORITHMS} failed): change "
+                        "numerics.mesh.growth, far_field_size_m or size_m", "-")
 
 
 @dataclass

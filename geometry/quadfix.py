@@ -83,10 +83,14 @@ def shape_quality(xy: np.ndarray, element: Sequence[int]) -> float:
     return min(element_quality(xy, element), EDGE_WEIGHT * edge_ratio(xy, element))
 
 
-def _ccw(xy: np.ndarray, element: Sequence[int]) -> Element:
+def _area2(xy: np.ndarray, element: Sequence[int]) -> float:
+    """Twice the signed area of a polygon (> 0 counter-clockwise)."""
     p = xy[list(element)]
-    area = np.sum(p[:, 0] * np.roll(p[:, 1], -1) - np.roll(p[:, 0], -1) * p[:, 1])
-    return tuple(int(n) for n in (element if area > 0 else element[::-1]))
+    return float(np.sum(p[:, 0] * np.roll(p[:, 1], -1) - np.roll(p[:, 0], -1) * p[:, 1]))
+
+
+def _ccw(xy: np.ndarray, element: Sequence[int]) -> Element:
+    return tuple(int(n) for n in (element if _area2(xy, element) > 0 else element[::-1]))
 
 
 def _edges(e: Element) -> Iterator[tuple[int, int]]:
@@ -252,10 +256,15 @@ def all_quads(xy: np.ndarray, elements: Sequence[Sequence[int]]
 
     ``elements``: node ids into ``xy`` ((n, 2), m). Returns the node coordinates (``xy`` and the
     new nodes after it), the quadrilaterals ((m, 4), counter-clockwise) and the number of
-    triangle pairs joined. Raises :class:`QuadRepairError` for an odd number of triangles or
-    when a triangle has no valid partner.
+    triangle pairs joined. Raises :class:`QuadRepairError` for a tangled mesh (an element
+    flat, or turning the other way than the others: a mesher's smoothing can push a node
+    across an edge), an odd number of triangles, or when a triangle has no valid partner.
     """
-    m = _Mesh(np.array(xy, dtype=float), elements)
+    xy = np.array(xy, dtype=float)
+    turns = {math.copysign(1.0, a) if a != 0.0 else 0.0 for a in (_area2(xy, e) for e in elements)}
+    if len(turns) > 1 or 0.0 in turns:
+        raise QuadRepairError("the mesh is tangled: an element is flat or inverted")
+    m = _Mesh(xy, elements)
     tris = [k for k, e in m.elems.items() if len(e) == 3]
     if len(tris) % 2:
         raise QuadRepairError(f"{len(tris)} triangles: an odd number cannot be paired")

@@ -2,8 +2,10 @@
 
 :class:`RunSummary` is the solver's :class:`~pilegroup.solver.exports.SolverSummary` with what
 the scenario adds (written by :func:`pilegroup.studies.run.pipeline.run_coupled`);
-:class:`JobSummary` is ``summary.json``, written by :func:`write_job_summary` only, whatever the
-run's end: ``complete``, ``failed`` or ``interrupted``. JSON keys are the field names.
+:class:`JobSummary` is ``summary.json``, written by :func:`write_job_summary` whatever the
+run's end: ``complete``, ``failed`` or ``interrupted`` (and ``failed``, with the same keys, by
+the run's watchdog when a rank dies of a signal: :mod:`pilegroup.studies.run.watchdog`). JSON
+keys are the field names.
 """
 
 from __future__ import annotations

@@ -35,10 +35,10 @@ from pathlib import Path
 from mpi4py import MPI
 
 from pilegroup.errors import FolderBusy, ScenarioError
+from pilegroup.studies.run.watchdog import LOCK_FILE
 
 log = logging.getLogger(__name__)
 
-LOCK_FILE = ".pilegroup.lock"
 #: The folders whose lock this process holds (resolved path -> file descriptor).
 _held: dict[Path, int] = {}
 
@@ -147,6 +147,11 @@ def folder_lock(out: Path, comm: MPI.Comm = MPI.COMM_WORLD) -> Iterator[None]:
     finally:
         if taken:
             _release(folder)
+
+
+def held_fd(out: Path) -> int | None:
+    """The descriptor of the lock file of ``out`` if this process holds it, else ``None``."""
+    return _held.get(Path(out).resolve())
 
 
 def empty_folder(folder: Path) -> None:

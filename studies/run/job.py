@@ -20,9 +20,10 @@ from pilegroup.solver.exports import peak_rss_mb
 from pilegroup.studies.report.run_report import write_report
 from pilegroup.studies.results.records import JobSummary, write_job_summary
 from pilegroup.studies.run.checkpoint import check_resume, completed_summary, remove_checkpoint
-from pilegroup.studies.run.folder_lock import folder_lock
+from pilegroup.studies.run.folder_lock import folder_lock, held_fd
 from pilegroup.studies.run.memory_check import memory_check, memory_on_mesh
 from pilegroup.studies.run.pipeline import estimate_dofs, run_coupled
+from pilegroup.studies.run.watchdog import watched
 
 log = logging.getLogger(__name__)
 
@@ -57,7 +58,9 @@ def run_scenario(sc: Scenario, out: Path, mesh_size: float | None = None,
 
     The run holds the lock of ``out`` for its life
     (:func:`~pilegroup.studies.run.folder_lock.folder_lock`): while another run holds it,
-    :class:`~pilegroup.errors.FolderBusy` is raised before anything is read or written.
+    :class:`~pilegroup.errors.FolderBusy` is raised before anything is read or written. A
+    rank that dies without a Python error (a signal) still leaves ``summary.json`` ``failed``
+    and the lock free: :func:`~pilegroup.studies.run.watchdog.watched`.
     """
     t0 = time.perf_counter()
     if mesh_size is not None:
@@ -68,7 +71,7 @@ def run_scenario(sc: Scenario, out: Path, mesh_size: float | None = None,
     # the one resolution of the scenario's geometry in a run; it refuses what the scenario's
     # validation refuses for its geometry, before the output folder is touched
     geo = resolve_geometry(sc)
-    with folder_lock(out, comm):
+    with folder_lock(out, comm), watched(out, comm, sc.name, t0, held_fd(out)):
         return _locked_run(sc, geo, out, stop_after, comm, resume, t0, force, memory_mb)
 
 

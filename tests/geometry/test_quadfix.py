@@ -80,3 +80,14 @@ def test_an_odd_number_of_triangles_is_refused():
     xy = np.array([(0.0, 0.0), (1.0, 0.0), (0.0, 1.0)])
     with pytest.raises(QuadRepairError, match="odd"):
         all_quads(xy, [(0, 1, 2)])
+
+
+def test_a_tangled_mesh_is_refused():
+    """A node pushed across an edge (as a mesher's smoothing once did) inverts a triangle."""
+    xy, quads = _grid(3, 2)
+    q = quads[(1, 1)]
+    elements = [e for cell, e in quads.items() if cell != (1, 1)]
+    elements += [(q[0], q[1], q[2]), (q[0], q[2], q[3])]
+    xy[q[0]] = (2.5, 1.2)  # node (1, 1) beyond the edge (2, 1)-(2, 2) of its triangle
+    with pytest.raises(QuadRepairError, match="tangled"):
+        all_quads(xy, elements)

@@ -122,7 +122,12 @@ def test_sigkill_then_resume_matches_uninterrupted_run(tmp_path, scenario, cache
     sets = (*SETS, "outputs.checkpoint_every_min=0.001")
     proc, _ = _start_and_signal(scenario, out, cache, signal.SIGKILL, after_day=0.5, sets=sets)
     assert proc.returncode == -signal.SIGKILL
-    assert not (out / "summary.json").exists()  # killed mid-way, before the end
+    # killed mid-way: the run's watchdog says so (within moments of the kill)
+    deadline = time.monotonic() + 10.0
+    while (out / ".pilegroup.lock").exists() and time.monotonic() < deadline:
+        time.sleep(0.02)
+    s = json.loads((out / "summary.json").read_text())
+    assert s["status"] == "failed" and s["reason"].startswith("the run ended without a Python")
     t_saved = _manifest(out)["t_day"]
     assert 0.5 <= t_saved < 2.0
     r = _run(scenario, out, cache, sets=sets, resume=True)
