@@ -12,6 +12,7 @@ from __future__ import annotations
 import argparse
 import json
 from pathlib import Path
+from typing import Any
 
 from pilegroup.errors import ScenarioError
 from pilegroup.fileio import write_json_atomic
@@ -26,14 +27,18 @@ LAB_DESCRIPTION = (
     "Element tests of the laws at one material point, no mesh: interface direct shear at "
     "several normal stresses (to failure), creep under held shear, relaxation under held slip, "
     "shear at several rates (both readings of Eq. 15, default and seed, side by side); soil "
-    "drained and undrained triaxial compression and oedometer. Parameters from a scenario's "
-    "layer (--scenario pier667 --layer mud) and/or given (--K 296 --n 0.29 ...; a given value "
-    "replaces the layer's). Writes OUT/<test>.csv (columns: docs/lab.md) and OUT/<test>.png.")
+    "drained and undrained triaxial compression and oedometer (load steps, a creep stage, "
+    "unloading), for Mohr-Coulomb, Drucker-Prager, linear elastic, Modified Cam Clay and Soft "
+    "Soil Creep. Parameters from a scenario's layer (--scenario pier667 --layer mud) and/or "
+    "given (--K 296 --n 0.29 ...; a given value replaces the layer's). Writes OUT/<test>.csv "
+    "(columns: docs/lab.md) and OUT/<test>.png.")
 FIT_DESCRIPTION = (
     "Parameters fitted to data with scipy's bounded least squares, printed under the "
     "scenario's key names with standard errors from the Jacobian and their correlations. "
     "interface-shear: K, n, R_f, delta_deg from direct-shear curves; interface-creep: "
-    "eta_MPa_day (and N) from creep curves (the CSV layout pilegroup lab writes); scenario: up "
+    "eta_MPa_day (and N) from creep curves (the CSV layout pilegroup lab writes); oedometer: "
+    "Soft Soil Creep's lambda_star, kappa_star, mu_star (and OCR) from an oedometer test with "
+    "load steps and creep stages, the law run through its programme; scenario: up "
     "to three scenario keys fitted to a measured settlement.csv or gauges.csv history, each "
     "evaluation a model run of a batch (parallel under mpirun, resumable).")
 
@@ -76,7 +81,10 @@ def _cmd_lab(args: argparse.Namespace) -> int:
         confining_stresses_kPa=tuple(args.confining_stresses_kPa
                                      or SoilProtocol.confining_stresses_kPa),
         max_axial_strain=args.max_axial_strain, steps=args.steps,
-        oedometer_max_kPa=args.oedometer_max_kPa)
+        oedometer_start_kPa=args.oedometer_start_kPa, oedometer_max_kPa=args.oedometer_max_kPa,
+        step_days=args.step_days, creep_days=args.creep_days,
+        substeps_per_decade=args.substeps_per_decade,
+        strain_rate_per_day=args.axial_strain_rate_per_day)
     out = run_lab(args.test, material, Path(args.out), iface, soil,
                   tuple(args.variant or VARIANTS))
     print(f"{args.test} ({out.source}): {out.csv}, {out.png}")
@@ -113,9 +121,27 @@ def lab_arguments(p: argparse.ArgumentParser) -> None:
                    help="triaxial: cell pressures (default 50 100 200)")
     t.add_argument("--max-axial-strain", type=float, default=0.15,
                    help="triaxial: final axial strain (default 0.15)")
+    t.add_argument("--axial-strain-rate-per-day", type=float, default=0.24,
+                   help="triaxial: axial strain rate (default 0.24, 1 %% per hour; Soft Soil "
+                   "Creep creeps over each step)")
+    t.add_argument("--oedometer-start-kPa", type=float, default=12.5,
+                   help="oedometer: vertical stress of the start (default 12.5)")
     t.add_argument("--oedometer-max-kPa", type=float, default=800.0,
-                   help="oedometer: largest vertical stress (default 800; doubling from 12.5)")
+                   help="oedometer: largest vertical stress (default 800; doubling from the "
+                   "start)")
+    t.add_argument("--step-days", type=float, default=1.0,
+                   help="oedometer: duration of each load step (default 1)")
+    t.add_argument("--creep-days", type=float, default=30.0,
+                   help="oedometer: the creep stage at the largest stress (default 30; 0: none)")
+    _substeps_argument(t)
     p.set_defaults(func=_cmd_lab)
+
+
+def _substeps_argument(p: Any) -> None:
+    """``--substeps-per-decade`` on a parser or an argument group."""
+    p.add_argument("--substeps-per-decade", type=int, default=20,
+                   help="oedometer, Soft Soil Creep: backward-Euler steps per decade of time "
+                   "in each hold (default 20)")
 
 
 def _report(result, args: argparse.Namespace, figure: Path | None) -> None:
@@ -128,6 +154,18 @@ def _report(result, args: argparse.Namespace, figure: Path | None) -> None:
         print(result.text())
         if figure is not None:
             print(f"  figure: {figure}")
+
+
+def _cmd_fit_oedometer(args: argparse.Namespace) -> int:
+    from pilegroup.studies.lab.fit_plots import write_oedometer_fit_figure
+    from pilegroup.studies.lab.oedometer_fit import fit_oedometer
+
+    path = Path(args.file)
+    fit = fit_oedometer(path, _material(args), args.OCR, args.substeps_per_decade)
+    out = Path(args.out) if args.out else path.parent
+    figure = write_oedometer_fit_figure(out / f"{path.stem}_fit.png", fit)
+    _report(fit.result, args, figure)
+    return 0
 
 
 def _cmd_fit_curves(args: argparse.Namespace) -> int:
@@ -201,6 +239,15 @@ def fit_arguments(p: argparse.ArgumentParser) -> None:
                            help="fit the Perzyna exponent N too")
             _param_arguments(f)
         f.set_defaults(func=_cmd_fit_curves)
+    o = sub.add_parser("oedometer", help="lambda_star, kappa_star, mu_star (and OCR) of Soft "
+                       "Soil Creep from an oedometer test", description=FIT_DESCRIPTION)
+    o.add_argument("file", metavar="FILE", help="CSV in the layout of pilegroup lab oedometer "
+                   "(step, time_day, vertical_stress_kPa, vertical_strain)")
+    o.add_argument("--out", default=None, help="folder of the figure (default: FILE's)")
+    o.add_argument("--json", action="store_true", help="one JSON object")
+    _substeps_argument(o)
+    _param_arguments(o)
+    o.set_defaults(func=_cmd_fit_oedometer)
     s = sub.add_parser("scenario", help="scenario keys fitted to a measured history",
                        description=FIT_DESCRIPTION)
     s.add_argument("scenario", help="scenario TOML file or bundled name")

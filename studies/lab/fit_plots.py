@@ -8,9 +8,11 @@ from typing import TYPE_CHECKING
 import numpy as np
 from matplotlib import colormaps
 from matplotlib.figure import Figure
+from matplotlib.ticker import NullFormatter
 
 from pilegroup.studies.lab.fit_stats import FitResult
 from pilegroup.studies.lab.interface_fit import CurveFit
+from pilegroup.studies.lab.oedometer_fit import OedometerFit
 from pilegroup.studies.report.plots import save_figure
 
 if TYPE_CHECKING:  # the scenario fit needs MPI and the solver; the curve fits do not
@@ -48,6 +50,43 @@ def curve_fit_figure(cf: CurveFit) -> Figure:
     axr.set_ylabel("residual, model / measured - 1")
     for a in (ax, axr):
         a.grid(alpha=0.3)
+    return fig
+
+
+def oedometer_fit_figure(of: OedometerFit) -> Figure:
+    """Data (markers) and the fitted law (lines); residuals.
+
+    End-of-step strains against log stress, every reading over time, the longest hold against
+    log time.
+    """
+    d = of.data
+    fig = Figure(figsize=(11.0, 8.0), layout="constrained")
+    (ax, axt), (axc, axr) = fig.subplots(2, 2)
+    e = d.ends()
+    ax.semilogx(d.stress[e], 100 * d.strain[e], "o", ms=4, label="data, end of each step")
+    ax.semilogx(d.stress[e], 100 * of.model[e], "-", label="fitted law")
+    axt.plot(d.time, 100 * d.strain, ".", ms=3, label="data")
+    axt.plot(d.time, 100 * of.model, "-", lw=1.0, label="fitted law")
+    k = max(range(1, len(d.steps)), key=lambda j: d.steps[j].times[-1] - d.steps[j].start_day)
+    m = (d.number == d.number[e[k]]) & (d.time > d.steps[k].start_day)
+    u = d.time[m] - d.steps[k].start_day
+    axc.semilogx(u, 100 * d.strain[m], "o", ms=3, label="data")
+    axc.semilogx(u, 100 * of.model[m], "-", label="fitted law")
+    axr.plot(d.time[of.used], of.residual, ".", ms=3)
+    axr.axhline(0.0, color="0.4", lw=0.8)
+    vals = ", ".join(f"{k} = {v:.4g}" for k, v in zip(of.result.names, of.result.values,
+                                                       strict=True))
+    ax.set(xlabel="vertical effective stress (kPa)", ylabel="vertical strain (%)")
+    ax.xaxis.set_minor_formatter(NullFormatter())
+    ax.set_title(f"oedometer fit: {vals}", fontsize="medium")
+    axt.set(xlabel="time (days)", ylabel="vertical strain (%)", title="every reading")
+    axc.set(xlabel=f"time since the load of step {d.number[e[k]]:g} (days)",
+            ylabel="vertical strain (%)", title="the longest hold")
+    axr.set(xlabel="time (days)", ylabel="residual, model / measured - 1")
+    for a in (ax, axt, axc, axr):
+        a.grid(alpha=0.3, which="both")
+    for a in (ax, axt, axc):
+        a.legend(fontsize="x-small")
     return fig
 
 
@@ -90,10 +129,15 @@ def write_scenario_fit_figure(path: Path, fit: ScenarioFit, result: FitResult) -
     return save_figure(scenario_fit_figure(fit, result), path)
 
 
+def write_oedometer_fit_figure(path: Path, of: OedometerFit) -> Path:
+    """Write the figure of an oedometer fit as PNG."""
+    return save_figure(oedometer_fit_figure(of), path)
+
+
 def write_fit_figure(path: Path, cf: CurveFit) -> Path:
     """Write the figure of a fit as PNG."""
     return save_figure(curve_fit_figure(cf), path)
 
 
-__all__ = ["curve_fit_figure", "scenario_fit_figure", "write_fit_figure",
-           "write_scenario_fit_figure"]
+__all__ = ["curve_fit_figure", "oedometer_fit_figure", "scenario_fit_figure",
+           "write_fit_figure", "write_oedometer_fit_figure", "write_scenario_fit_figure"]

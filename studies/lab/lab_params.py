@@ -2,7 +2,8 @@
 
 Keys are the scenario's (``K``, ``n``, ``R_f``, ``delta_deg``, ``eta_MPa_day`` of
 ``layers[i].interface``, ``N`` of ``[interface]``; ``E_MPa``, ``nu``, ``c_kPa``, ``phi_deg``,
-``psi_deg``, ``e0`` of ``layers[i]``; ``soil_model`` = ``soil.model``). A layer of a scenario
+``psi_deg``, ``e0`` of ``layers[i]``; ``soil_model`` = the layer's ``model``, else ``soil.model``;
+the critical-state keys of :mod:`.soft_soil_params`). A layer of a scenario
 gives every key it has; a value given on the command line replaces the layer's. The laws are
 built here from those values and checked on the way (an invalid or missing value is a
 :class:`~pilegroup.errors.ScenarioError` naming the key: exit code 2).
@@ -28,17 +29,25 @@ from pilegroup.constitutive.soil import (
 from pilegroup.errors import ConstitutiveError, ScenarioError
 from pilegroup.model import load_scenario
 from pilegroup.model.site import InterfaceParams
+from pilegroup.model.soil_models import layer_model
+from pilegroup.studies.lab.soft_soil_params import (
+    CRITICAL_KEYS,
+    CRITICAL_STATE_LAWS,
+    CRITICAL_STATE_MODELS,
+    CriticalStateLaw,
+    critical_state_law,
+)
 from pilegroup.validate import require_in_range, require_non_negative, require_positive
 
 #: Normal penalty stiffness of the lab's interface, kPa/m (held normal stress: no effect).
 LAB_K_NORMAL = 1.0e6
 INTERFACE_KEYS = ("K", "n", "R_f", "delta_deg", "eta_MPa_day", "N")
-SOIL_KEYS = ("E_MPa", "nu", "c_kPa", "phi_deg", "psi_deg", "e0", "soil_model")
+SOIL_KEYS = ("E_MPa", "nu", "c_kPa", "phi_deg", "psi_deg", "e0", "soil_model") + CRITICAL_KEYS
 #: The two readings of Eq. 15 (docs/model.md, item 4).
 VARIANTS = ("default", "seed")
 SOIL_MODELS = {"mohr_coulomb": MohrCoulomb, "drucker_prager": DruckerPrager,
-               "linear_elastic": LinearElastic}
-SoilLaw = LinearElastic | MohrCoulomb | DruckerPrager
+               "linear_elastic": LinearElastic, **CRITICAL_STATE_LAWS}
+SoilLaw = LinearElastic | MohrCoulomb | DruckerPrager | CriticalStateLaw
 
 
 @dataclass(frozen=True)
@@ -85,6 +94,8 @@ class LabMaterial:
         model = self.get("soil_model") or "mohr_coulomb"
         if model not in SOIL_MODELS:
             raise ScenarioError("--soil_model", model, "must be one of " + ", ".join(SOIL_MODELS))
+        if model in CRITICAL_STATE_MODELS:
+            return critical_state_law(self, model, test)
         E = 1000.0 * float(self.need("E_MPa", test))
         nu = self.need("nu", test)
         require_elastic_constants(E, nu, error=ScenarioError)
@@ -118,7 +129,8 @@ def layer_values(scenario: str, layer: str, sets: Mapping[str, Any] | None = Non
     lay = sc.layers[j]
     vals: dict[str, Any] = {"E_MPa": lay.E_MPa, "nu": lay.nu, "c_kPa": lay.c_kPa,
                             "phi_deg": lay.phi_deg, "psi_deg": lay.psi_deg, "e0": lay.e0,
-                            "soil_model": sc.soil.model, "N": sc.interface.N}
+                            "soil_model": layer_model(lay, sc.soil), "N": sc.interface.N}
+    vals.update({k: getattr(lay, k) for k in CRITICAL_KEYS})
     if lay.interface is not None:
         ip = lay.interface
         vals.update(K=ip.K, n=ip.n, R_f=ip.R_f, delta_deg=ip.delta_deg,

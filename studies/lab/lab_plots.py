@@ -3,7 +3,8 @@
 Interface tests: one panel per Eq. 15 reading (``default``, ``seed``) side by side with the
 same axes where the two are comparable (shear curves share one panel: solid default, dashed
 seed). Soil tests: the triaxial's deviator and volume change against axial strain and its
-stress path; the oedometer's void ratio against the vertical stress (log scale).
+stress path; the oedometer's void ratio against the vertical stress (log scale), each step's
+strain against the time since its load (log scale: creep) and the lateral stress.
 """
 
 from __future__ import annotations
@@ -13,6 +14,7 @@ from pathlib import Path
 import numpy as np
 from matplotlib import colormaps
 from matplotlib.figure import Figure
+from matplotlib.ticker import NullFormatter
 
 from pilegroup.studies.report.plots import save_figure
 from pilegroup.studies.results.tables import Table
@@ -125,15 +127,32 @@ def _triaxial_figure(t: Table, title: str) -> Figure:
 
 
 def _oedometer_figure(t: Table, title: str) -> Figure:
-    fig = Figure(figsize=(11.0, 4.5))
-    ax, axh = fig.subplots(1, 2)
-    ax.semilogx(t["vertical_stress_kPa"], t["void_ratio"], "o-")
+    fig = Figure(figsize=(15.0, 4.5))
+    ax, axt, axh = fig.subplots(1, 3)
+    steps = np.unique(t["step"])
+    ends = np.array([np.nonzero(t["step"] == k)[0][-1] for k in steps])
+    ax.semilogx(t["vertical_stress_kPa"], t["void_ratio"], "-", color="0.6", lw=0.8,
+                label="every reading")
+    ax.semilogx(t["vertical_stress_kPa"][ends], t["void_ratio"][ends], "o", ms=4,
+                label="end of each step")
     ax.set(xlabel="vertical effective stress (kPa)", ylabel="void ratio e", title=title)
-    axh.plot(t["vertical_stress_kPa"], t["horizontal_stress_kPa"], "o-")
+    ax.xaxis.set_minor_formatter(NullFormatter())
+    for k in steps[1:]:
+        m = t["step"] == k
+        start = t["time_day"][np.nonzero(m)[0][0] - 1]  # the previous step's last reading
+        u = t["time_day"][m] - start
+        strain = 100 * (t["vertical_strain"][m] - t["vertical_strain"][m][0])
+        axt.semilogx(u[u > 0], strain[u > 0], color=_colour(int(k) - 1, len(steps) - 1),
+                     label=f"step {k:g}: {t['vertical_stress_kPa'][m][0]:.4g} kPa")
+    axt.set(xlabel="time since the step's load (days)",
+            ylabel="vertical strain since its first reading (%)", title="creep in each step")
+    axh.plot(t["vertical_stress_kPa"], t["horizontal_stress_kPa"], "o-", ms=3)
     axh.set(xlabel="vertical effective stress (kPa)",
             ylabel="horizontal effective stress (kPa)", title="lateral stress")
-    for a in (ax, axh):
+    for a in (ax, axt, axh):
         a.grid(alpha=0.3, which="both")
+    ax.legend(fontsize="x-small")
+    axt.legend(fontsize="xx-small", ncol=2)
     return fig
 
 

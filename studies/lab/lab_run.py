@@ -9,7 +9,8 @@ from pilegroup.studies.lab.interface_tests import InterfaceProtocol, run_interfa
 from pilegroup.studies.lab.lab_params import VARIANTS, LabMaterial
 from pilegroup.studies.lab.lab_plots import write_lab_figure
 from pilegroup.studies.lab.lab_tables import INTERFACE_TESTS, csv_name, write_lab_table
-from pilegroup.studies.lab.soil_tests import SoilProtocol, oedometer_test, triaxial_test
+from pilegroup.studies.lab.oedometer_programme import oedometer_test
+from pilegroup.studies.lab.soil_tests import SoilProtocol, triaxial_test
 from pilegroup.studies.results.tables import Table
 
 

@@ -1,8 +1,8 @@
 """The CSV files of ``pilegroup lab``: their names and columns (the data contract) and writer.
 
-``pilegroup fit`` reads the interface files with :func:`read_lab_table`, so a lab output can be
-fed back. Stresses kPa, slips m, time days; strains dimensionless, compression positive in the
-soil tests (the laboratory's sign), as are the interface's normal stresses.
+``pilegroup fit`` reads the interface and oedometer files with :func:`read_lab_table`, so a lab
+output can be fed back. Stresses kPa, slips m, time days; strains dimensionless, compression
+positive in the soil tests (the laboratory's sign), as are the interface's normal stresses.
 
 * interface tests, one layout for all four (``interface-shear.csv``, ``interface-creep.csv``,
   ``interface-relaxation.csv``, ``interface-rate.csv``): ``variant,curve,time_day,
@@ -14,8 +14,9 @@ soil tests (the laboratory's sign), as are the interface's normal stresses.
 * ``triaxial.csv``: ``drainage,curve,confining_stress_kPa,axial_strain,volumetric_strain,
   p_kPa,q_kPa,excess_pore_pressure_kPa`` (``drained`` or ``undrained``; mean effective stress
   p' and deviator q; the excess pore pressure of the undrained test, 0 drained);
-* ``oedometer.csv``: ``step,vertical_strain,vertical_stress_kPa,horizontal_stress_kPa,
-  void_ratio`` (loading then unloading; effective stresses).
+* ``oedometer.csv``: ``step,time_day,vertical_strain,vertical_stress_kPa,
+  horizontal_stress_kPa,void_ratio`` (the load step's number, 0 the start; the time of the
+  reading; loading, the creep stage, unloading; effective stresses).
 """
 
 from __future__ import annotations
@@ -42,8 +43,8 @@ COLUMNS: dict[str, tuple[str, ...]] = {
     **{t: INTERFACE_COLUMNS for t in INTERFACE_TESTS},
     "triaxial": ("drainage", "curve", "confining_stress_kPa", "axial_strain",
                  "volumetric_strain", "p_kPa", "q_kPa", "excess_pore_pressure_kPa"),
-    "oedometer": ("step", "vertical_strain", "vertical_stress_kPa", "horizontal_stress_kPa",
-                  "void_ratio"),
+    "oedometer": ("step", "time_day", "vertical_strain", "vertical_stress_kPa",
+                  "horizontal_stress_kPa", "void_ratio"),
 }
 #: The columns that hold text; all others hold numbers.
 TEXT_COLUMNS = frozenset({"variant", "drainage"})
