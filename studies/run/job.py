@@ -19,6 +19,7 @@ from pilegroup.model import Scenario
 from pilegroup.solver.exports import peak_rss_mb
 from pilegroup.studies.report.run_report import write_report
 from pilegroup.studies.results.records import JobSummary, write_job_summary
+from pilegroup.studies.results.rundata import RUN_FILES
 from pilegroup.studies.run.checkpoint import check_resume, completed_summary, remove_checkpoint
 from pilegroup.studies.run.folder_lock import folder_lock, held_fd
 from pilegroup.studies.run.memory_check import memory_check, memory_on_mesh
@@ -157,7 +158,14 @@ def _write_plots(out: Path, comm: MPI.Comm) -> None:
 
 
 def _plots_of_what_was_reached(out: Path) -> None:
-    """The report's figures of a run that stopped (e.g. its load–settlement curve)."""
+    """The report's figures of a run that stopped (e.g. its load–settlement curve).
+
+    None when it stopped before its first output time (nothing to draw, and nothing to warn
+    about: the failure is the news).
+    """
+    if not any((out / name).is_file() for name in RUN_FILES):
+        log.info("no plots: the run stopped before its first output")
+        return
     try:
         for path in write_report(out):
             log.info("wrote %s", path)

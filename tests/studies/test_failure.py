@@ -60,6 +60,25 @@ def test_collective_failure_writes_failed_summary(tmp_path, small_pile, monkeypa
     assert s["reason"] == "StepFailure: stage 'load': step at t = 0.5 day failed"
 
 
+def test_a_run_that_fails_before_its_first_output_warns_of_nothing(tmp_path, small_pile,
+                                                                    monkeypatch, caplog):
+    """A failure before any output time (here in the geostatic stage) is the one piece of news:
+    no warning that the folder is "not a run output folder" for the figures it cannot draw."""
+    from pilegroup.errors import StepFailure
+    from pilegroup.studies.cli import commands as cli
+    from pilegroup.studies.run import job as run
+
+    def fail(*args, **kwargs):
+        raise StepFailure("geostatic stage 'geostatic': max |u| = 2.0e-04 m > 0.0001 m")
+
+    monkeypatch.setenv("PILEGROUP_MESH_CACHE", str(tmp_path / "cache"))
+    monkeypatch.setattr(run, "run_coupled", fail)
+    with caplog.at_level("INFO"):
+        assert cli.main(["run", small_pile, "--out", str(tmp_path / "run")]) == 1
+    assert not [r for r in caplog.records if r.levelname == "WARNING"], caplog.text
+    assert "no plots: the run stopped before its first output" in caplog.text
+
+
 def _pilegroup_lines(stderr):
     return [ln for ln in stderr.splitlines() if ln.startswith("pilegroup:")]
 
