@@ -3,7 +3,8 @@
 ``numerics.symmetry`` is resolved here. A scenario's layers are horizontal and its block is
 centred with the same supports on opposite sides, so the model is mirror-symmetric about a
 plane exactly when its pile layout, cap and loads are (:func:`GeometrySpec.symmetry_planes
-<pilegroup.geometry.spec.GeometrySpec.symmetry_planes>` and :func:`_load_asymmetry`).
+<pilegroup.geometry.spec.GeometrySpec.symmetry_planes>` and
+:func:`pilegroup.model.mirror.load_asymmetry`).
 """
 
 from __future__ import annotations
@@ -16,7 +17,7 @@ from pilegroup.geometry import spec
 from pilegroup.geometry import symmetry as sym
 from pilegroup.geometry.plan import cell_grid
 from pilegroup.model import Scenario
-from pilegroup.model.actions import ANTISYMMETRIC, COMPONENTS
+from pilegroup.model.mirror import load_asymmetry
 
 
 def _full_spec(sc: Scenario, mesh_size: float | None) -> spec.GeometrySpec:
@@ -55,31 +56,6 @@ def _full_spec(sc: Scenario, mesh_size: float | None) -> spec.GeometrySpec:
     )
 
 
-def _load_asymmetry(sc: Scenario, axis: str) -> str | None:
-    """Why the scenario's loads are not mirror-symmetric about ``axis`` = 0; ``None`` if they are.
-
-    The vertical cap load is uniform on the cap top or the pile heads (symmetric with the
-    geometry); a horizontal force normal to the plane and a moment about an axis in it are not
-    (:data:`~pilegroup.model.actions.ANTISYMMETRIC`): a force along x keeps the plane y = 0. A
-    surcharge is symmetric when its rectangle is centred on the plane (the whole surface is).
-    """
-    if sc.outputs.cap_stiffness:
-        return "outputs.cap_stiffness: the stiffness matrix loads the face in every component"
-    for i, a in sc.cap_actions():
-        for k in ANTISYMMETRIC[axis]:
-            if abs(a[k]) > 0.0:
-                unit = "kN" if k < 3 else "kN m"
-                return (f"load stage {sc.stages[i].name!r} has {COMPONENTS[k]} = {a[k]:g} {unit}"
-                        " about the cap centre")
-    for st in sc.stages:
-        if st.kind == "surcharge" and st.area_m is not None:
-            lo, hi = st.area_m[:2] if axis == "x" else st.area_m[2:]
-            if abs(lo + hi) > sym.TOL:
-                return (f"surcharge stage {st.name!r} spans {axis} = {lo:g} .. {hi:g} m, not "
-                        f"centred on {axis} = 0")
-    return None
-
-
 def _resolve(sc: Scenario, full: spec.GeometrySpec) -> tuple[sym.Symmetry, str]:
     """(mode, reason) of ``numerics.symmetry`` for the whole model ``full`` and its loads.
 
@@ -87,7 +63,7 @@ def _resolve(sc: Scenario, full: spec.GeometrySpec) -> tuple[sym.Symmetry, str]:
     explicit mode cuts at a plane the model or its loads are not symmetric about.
     """
     asked = sc.numerics.symmetry
-    why = {a: sym.asymmetry(full.piles, full.cap, a) or _load_asymmetry(sc, a)
+    why = {a: sym.asymmetry(full.piles, full.cap, a) or load_asymmetry(sc, a)
            for a in ("x", "y")}
     planes = tuple(a for a in ("x", "y") if why[a] is None)
     whys = [f"{a} = 0 ({why[a]})" for a in ("x", "y") if a not in planes]

@@ -19,17 +19,19 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Literal, Protocol
 
+from pilegroup.model.mirror import PLANES as MODEL_PLANES
+from pilegroup.model.mirror import TOL, layout_asymmetry
+
 __all__ = ["MODES", "PLANES", "TOL", "Symmetry", "asymmetry", "describe_planes", "find_pile",
            "is_kept", "meshed_fraction", "mode_of", "mirror_map"]
 
 #: What a model keeps of the full geometry; "none" is the full model.
 Symmetry = Literal["none", "quarter", "half_x", "half_y"]
 MODES: tuple[Symmetry, ...] = ("none", "quarter", "half_x", "half_y")
-#: The mirror planes each mode cuts at, by the axis normal to them ("x": the plane x = 0).
-PLANES: dict[str, tuple[str, ...]] = {"none": (), "half_x": ("x",), "half_y": ("y",),
-                                      "quarter": ("x", "y")}
-#: Absolute tolerance (m) of every symmetry comparison.
-TOL = 1e-9
+#: The mirror planes each mode cuts at, by the axis normal to them ("x": the plane x = 0), and
+#: the absolute tolerance (m) of every symmetry comparison: the scenario's
+#: (:mod:`pilegroup.model.mirror`).
+PLANES: dict[str, tuple[str, ...]] = MODEL_PLANES
 
 
 class PlanPile(Protocol):
@@ -84,23 +86,18 @@ def find_pile(piles: Sequence[PlanPile], x: float, y: float) -> int | None:
 
 
 def asymmetry(piles: Sequence[PlanPile], cap: PlanRectangle | None, axis: str) -> str | None:
-    """Why the geometry is not mirror-symmetric about the plane ``axis`` = 0; ``None`` if it is."""
+    """Why the geometry is not mirror-symmetric about the plane ``axis`` = 0; ``None`` if it is.
+
+    The cap must be centred on the plane; the piles compare as the scenario's do
+    (:func:`pilegroup.model.mirror.layout_asymmetry`), with their embedment too.
+    """
     if cap is not None:
         lo, hi = (cap.x_min, cap.x_max) if axis == "x" else (cap.y_min, cap.y_max)
         if abs(lo + hi) > TOL:
             return f"the cap spans {axis} = {lo:g} .. {hi:g} m, not centred on {axis} = 0"
-    for i, p in enumerate(piles, start=1):
-        x, y = (-p.x, p.y) if axis == "x" else (p.x, -p.y)
-        j = find_pile(piles, x, y)
-        if j is None:
-            return f"pile {i} at ({p.x:g}, {p.y:g}) m has no mirror image at ({x:g}, {y:g}) m"
-        q = piles[j - 1]
-        for key in ("diameter", "length_in_soil", "embedment"):
-            a, b = getattr(p, key), getattr(q, key)
-            if abs(a - b) > TOL:
-                return (f"pile {i} and its mirror image, pile {j}, differ in {key} "
-                        f"({a:g} vs {b:g} m)")
-    return None
+    props = {key: [getattr(p, key) for p in piles]
+             for key in ("diameter", "length_in_soil", "embedment")}
+    return layout_asymmetry([(p.x, p.y) for p in piles], props, axis)
 
 
 def is_kept(p: PlanPile, planes: Sequence[str]) -> bool:

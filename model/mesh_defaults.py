@@ -24,8 +24,10 @@ study validated, docs/results.md):
 * with ``Q2Q1``: ``size_m = min(2 d, clear gap)``, twice every vertical length (the cap's at
   most its thickness) and ``n_circ_min = 16`` (:data:`Q2_LENGTH`).
 
-Memory budget: when the whole model's estimated unknowns (:func:`estimated_unknowns`) exceed
-:data:`UNKNOWN_BUDGET`, the automatic sizes coarsen step by step (:data:`STEPS`: longer
+Memory budget: when the estimated unknowns (:func:`estimated_unknowns`) of the part the run
+models (the whole block, or the half or quarter its mirror symmetry allows,
+:func:`pilegroup.model.mirror.kept_fraction`) exceed :data:`UNKNOWN_BUDGET`, the automatic
+sizes coarsen step by step (:data:`STEPS`: longer
 elements, fewer edges around a pile, one element layer across a thin layer) until they fit: a
 default run fits a 2-core, 24 GB machine for groups up to 6 x 6 of any diameter
 (``tests/model/test_mesh_defaults.py``). Keys the scenario gives are kept as given.
@@ -45,8 +47,8 @@ from pilegroup.model.mesh_estimate import EstimatedScenario, estimated_unknowns
 Q1Q1_REASON = ("auto: every action is vertical and the soil stays in its elastic range or "
                "has no plastic flow to lock")
 
-#: Whole-model unknowns a default mesh may have (before symmetry reduction): the full Pier 667
-#: at h = 0.1 m (623,988 unknowns) ran in 14.6 GB on 2 ranks with the kept LU.
+#: Unknowns a default mesh may have in the part the run models: the full Pier 667 at h = 0.1 m
+#: (623,988 unknowns) ran in 14.6 GB on 2 ranks with the kept LU.
 UNKNOWN_BUDGET = 600_000
 #: Edges around a pile.
 N_CIRC = 28
@@ -126,9 +128,11 @@ def _nominal(sc: EstimatedScenario) -> dict[str, float | int]:
     return out
 
 
-def resolve_mesh(sc: EstimatedScenario, given: Mapping[str, float | int], element: str
-                 ) -> tuple[dict[str, float | int], int]:
+def resolve_mesh(sc: EstimatedScenario, given: Mapping[str, float | int], element: str,
+                 fraction: float = 1.0) -> tuple[dict[str, float | int], int]:
     """Every ``numerics.mesh`` key: ``given`` ones kept, the others automatic within budget.
+
+    ``fraction``: the part of the whole block the run models (the budget is on its unknowns).
 
     Returns the sizes and the index of the :data:`STEPS` entry they come from (0: the nominal
     sizes fit :data:`UNKNOWN_BUDGET`; the last one when nothing fits, which the memory check
@@ -151,7 +155,7 @@ def resolve_mesh(sc: EstimatedScenario, given: Mapping[str, float | int], elemen
         if "size_m" not in given:
             sizes["size_m"] = min(sizes["size_m"], sizes["far_field_size_m"])
         sizes["far_field_size_m"] = max(sizes["far_field_size_m"], sizes["size_m"])
-        if estimated_unknowns(_with_mesh(sc, sizes, element)) <= UNKNOWN_BUDGET:
+        if estimated_unknowns(_with_mesh(sc, sizes, element), fraction) <= UNKNOWN_BUDGET:
             break
     return sizes, step
 
@@ -170,8 +174,12 @@ def _with_mesh(sc: EstimatedScenario, sizes: Mapping[str, float | int], element:
     return _Sized(sc, replace(sc.numerics, mesh=mesh, element=element))
 
 
-def resolve_numerics(sc: EstimatedScenario, locking: str | None) -> Numerics:
+def resolve_numerics(sc: EstimatedScenario, locking: str | None, fraction: float = 1.0
+                     ) -> Numerics:
     """``sc.numerics`` with its element pair and every mesh size resolved.
+
+    ``fraction``: the part of the whole block the run models
+    (:func:`pilegroup.model.mirror.kept_fraction`), whose unknowns the budget bounds.
 
     ``numerics.element = "auto"``: Q2Q1 where trilinear hexahedra lock (``locking``, the
     scenario's reason, or None) and the Q2Q1 model fits :data:`UNKNOWN_BUDGET` at the
@@ -185,14 +193,15 @@ def resolve_numerics(sc: EstimatedScenario, locking: str | None) -> Numerics:
     if element == "auto" or num.element_reason.startswith("auto"):
         element, reason = "Q1Q1", Q1Q1_REASON
         if locking is not None:
-            q2, step = resolve_mesh(sc, given, "Q2Q1")
+            q2, step = resolve_mesh(sc, given, "Q2Q1", fraction)
             if step == 0:
                 element, reason, sizes = "Q2Q1", f"auto: {locking}", q2
             else:
                 reason = (f"auto: {locking}, but Q2Q1 exceeds the memory budget "
-                          f"({UNKNOWN_BUDGET:,} unknowns) at the automatic mesh sizes")
+                          f"({UNKNOWN_BUDGET:,} unknowns in the part modelled) at the "
+                          "automatic mesh sizes")
     if sizes is None:
-        sizes, _ = resolve_mesh(sc, given, element)
+        sizes, _ = resolve_mesh(sc, given, element, fraction)
     automatic = tuple(k for k in sizes if k not in given)
     mesh = MeshOptions(**sizes, automatic=automatic)  # type: ignore[arg-type]
     return replace(num, element=element, mesh=mesh, element_reason=reason)

@@ -20,6 +20,7 @@ from pilegroup.model.insitu import check_groundwater, vertical_effective_stress
 from pilegroup.model.law_rules import check_all as check_law_inputs
 from pilegroup.model.mesh_defaults import describe, locking_warning, resolve_numerics
 from pilegroup.model.mesh_estimate import MAX_CELLS, estimated_cells
+from pilegroup.model.mirror import kept_fraction
 from pilegroup.model.piles import Piles
 from pilegroup.model.reference import Reference, check_reference
 from pilegroup.model.site import Cap, Layer, Site, Structure
@@ -70,7 +71,8 @@ class Scenario:
 
         :func:`pilegroup.model.mesh_defaults.resolve_numerics`.
         """
-        object.__setattr__(self, "numerics", resolve_numerics(self, self.locking_reason()))
+        object.__setattr__(self, "numerics", resolve_numerics(self, self.locking_reason(),
+                                                             kept_fraction(self)))
 
     def locking_reason(self) -> str | None:
         """Why trilinear hexahedra (Q1Q1) would lock in this scenario, or None.

@@ -12,6 +12,7 @@ from pilegroup.model import bundled_text, scenario_from_dict
 from pilegroup.model.loader import BUNDLED
 from pilegroup.model.mesh_defaults import UNKNOWN_BUDGET
 from pilegroup.model.mesh_estimate import estimated_unknowns
+from pilegroup.model.mirror import kept_fraction
 
 #: The sizes the Pier 667 mesh study validated (docs/results.md), which the rules give.
 PIER_SIZES = {"size_m": 1.0, "far_field_size_m": 16.0, "growth": 1.6, "n_circ_min": 28,
@@ -87,8 +88,30 @@ def test_automatic_is_not_a_scenario_key():
 @pytest.mark.parametrize("n", [2, 4, 6])
 @pytest.mark.parametrize("d", [0.3, 1.0, 2.5])
 def test_groups_up_to_6x6_fit_the_budget(n, d):
+    """The budget holds for the part the run models (a quarter for these symmetric groups)."""
     sc = scenario_from_dict(group(n, d))
-    assert estimated_unknowns(sc) <= UNKNOWN_BUDGET
+    assert kept_fraction(sc) == 0.25
+    assert estimated_unknowns(sc, kept_fraction(sc)) <= UNKNOWN_BUDGET
+
+
+def test_the_budget_is_on_the_part_modelled():
+    """A 6 x 6 group of 1 m piles in the pier's soil: its quarter fits the budget at the nominal
+    sizes (h = d, 28 edges around a pile), where its whole block would not; the full model of
+    the same group (``numerics.symmetry = "none"``) coarsens to fit."""
+    quarter = scenario_from_dict(group(6, 1.0))
+    data = group(6, 1.0)
+    data.setdefault("numerics", {})["symmetry"] = "none"
+    full = scenario_from_dict(data)
+    assert estimated_unknowns(quarter) > UNKNOWN_BUDGET
+    assert (quarter.numerics.mesh.size_m, quarter.numerics.mesh.n_circ_min) == (1.0, 28)
+    assert full.numerics.mesh.size_m > 1.0 or full.numerics.mesh.n_circ_min < 28
+    assert estimated_unknowns(full) <= UNKNOWN_BUDGET
+
+
+def test_loads_that_break_a_mirror_plane_halve_the_part_not_quarter_it():
+    data = group(2, 1.0, lateral=True)
+    sc = scenario_from_dict(data)
+    assert kept_fraction(sc) == 0.5
 
 
 def test_sizes_follow_the_pile_diameter_and_the_gap():

@@ -220,7 +220,7 @@ CATALOGUE: dict[str, tuple[str, ...]] = {
     "geometry/spec.py::GeometrySpec._check_symmetry": (G, "symmetry-geometry"),
     # two piles in one cell coincide: refused as overlapping first
     "geometry/plan.py::cell_grid": (G, "pile-cell-edge"),
-    "geometry/far_field.py::_mesh": (M,),  # gmsh finds no convex quadrilateral far field
+    "geometry/far_field.py::far_field": (M,),  # gmsh finds no convex quadrilateral far field
     "geometry/convert.py::check_mesh": (M,),  # the mesh gmsh made is invalid
     "geometry/convert.py::_share_error": (M,),  # the meshing rank's refusal on every rank
     "studies/run/auto_preset.py::auto_preset": (G,),  # the table's last row matches any size
