@@ -241,6 +241,14 @@ class BiotProblem(MonolithicAlgebra):
         return self.layout.p_mesh
 
     @property
+    def surface_loads(self) -> list[tuple[SurfaceLoad | FaceAction, fem.Constant]]:
+        """Every surface load and face action with its amplitude constant (set by the stages).
+
+        The residual's load terms are :meth:`FormBuilder.surface_loads` of these loads.
+        """
+        return list(self._load_consts)
+
+    @property
     def has_solids(self) -> bool:
         """Whether the mesh has structure (pile/cap) cells."""
         return self.layout.has_solids

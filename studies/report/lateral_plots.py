@@ -2,7 +2,8 @@
 
 ``pile_bending.png`` (at the last output time): the lateral deflection and the bending moment of
 the piles against depth, along x and along y (every pile of a small group, the key piles of a
-large one), down to below the deepest toe. ``cap_motion.png``: the cap's displacements and
+large one), from the head (depth 0) down to below the deepest toe, a dot at every section of
+``pile_bending.csv``. ``cap_motion.png``: the cap's displacements and
 rotations at the action point against time. Conventions: :mod:`pilegroup.studies.run.section_probe`.
 """
 
@@ -31,7 +32,7 @@ def plot_pile_bending(run: RunData) -> Figure:
         z = last["depth_m"][m][order]
         for ax, col, scale in zip(axes, ("ux_m", "uy_m", "My_kNm", "Mx_kNm"),
                                   (1000.0, 1000.0, 1.0, 1.0), strict=True):
-            ax.plot(scale * last[col][m][order], z, color=cmap(k % 10), label=name)
+            ax.plot(scale * last[col][m][order], z, color=cmap(k % 10), marker=".", label=name)
     for ax, label in zip(axes, ("deflection ux (mm)", "deflection uy (mm)",
                                 "moment My (kN m)", "moment Mx (kN m)"), strict=True):
         ax.axvline(0.0, color="0.5", lw=0.6)

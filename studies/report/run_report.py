@@ -254,12 +254,6 @@ def _loads_section(run: RunData) -> list[str]:
     ref = run.reference
     if ref is not None and ref.total_load_kN is not None:
         notes.append(f"reference total load on the foundation: {ref.total_load_kN:g} kN")
-    if run.heads is not None and run.loads is not None:
-        m = run.loads["t_day"] == run.loads["t_day"].max()
-        notes.append(f"the axial forces integrated from the piles' stress at their uppermost "
-                     f"sections (`pile_loads.csv`) total "
-                     f"{float(run.loads['head_force_kN'][m].sum()):.1f} kN (docs/model.md, "
-                     "\"Which head force\")")
     return lines + ["", "; ".join(notes) + ".", ""]
 
 

@@ -10,8 +10,7 @@ Quantities (unit; file of the run folder):
 * ``ux_m``, ``uy_m``, ``uz_m`` (m), ``rx_rad``, ``ry_rad``, ``rz_rad`` (rad; ``cap_motion.csv``):
   the cap's displacement (z up) and rotation (right-hand rule) at the reference point;
 * ``N_kN`` (kN; ``pile_heads.csv``): the axial force at a pile head, compression positive (a
-  run folder without ``pile_heads.csv`` gives it from ``pile_loads.csv``'s ``head_force_kN``,
-  the force in the pile's top element layer);
+  run folder without ``pile_heads.csv`` gives it from ``pile_loads.csv``'s ``head_force_kN``);
 * ``V_kN`` (kN; ``pile_heads.csv``): the shear resultant at a pile head, ``sqrt(Vx^2 + Vy^2)``;
 * ``M_max_kNm`` (kNm; ``pile_max_moment.csv``): the largest resultant bending moment along a
   pile, at the depth ``depth_m`` (m below the ground surface).

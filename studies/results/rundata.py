@@ -159,8 +159,9 @@ class RunData:
         """The head force of every pile at the last output time: ``(t, {pile: kN}, source)``.
 
         The cap's action on the pile at its head (``pile_heads.csv``'s ``N_kN``) where the run
-        has it, else the axial force at the uppermost section (``pile_loads.csv``); ``source``
-        says which, in words.
+        has it, else ``pile_loads.csv``'s ``head_force_kN`` (the same number in a run folder
+        that has both; a folder without ``pile_heads.csv`` is of a run without cap actions
+        from before the heads were written); ``source`` says which, in words.
         """
         for table, column, source in (
                 (self.heads, "N_kN", "the cap's action on the pile at its head, "

@@ -15,13 +15,10 @@ positive down; forces kN; stresses kPa; displacements m.
 * ``interface_layers.csv``: the columns of ``layer_history.csv``, every pile at the output
   times; a layer's ``depth_bottom_m`` is the pile's toe where the pile ends in it (a layer mean
   times the pile's perimeter and the layer's thickness is then the layer's shaft force);
-* ``pile_loads.csv``: ``t_day,pile,x_m,y_m,head_force_kN,depth_m``: the axial force in the pile
-  due to the loads at its uppermost section (the top element layer's mid-height, ``depth_m``
-  below the ground surface), from the pile's own stress: the first row of the pile's
-  ``pile_profiles.csv``. ``pile_heads.csv``'s ``N_kN`` is the force at the head itself, the
-  cap's action on the pile, which the applied load balances; the two differ by the shaft
-  friction above the section and by how the section's stress is summed (docs/model.md, "Which
-  head force");
+* ``pile_loads.csv``: ``t_day,pile,x_m,y_m,head_force_kN,depth_m``: each pile's head force
+  due to the loads, the same number as ``pile_heads.csv``'s ``N_kN`` (``depth_m`` 0, the head).
+  The axial force below the head, read as a strain gauge reads it, is ``pile_profiles.csv``'s
+  (docs/model.md, "Which head force");
 * ``load_settlement.csv``: ``t_day,stage,load_factor,load_kN,settlement_m`` (every accepted
   step: the load–settlement curve, also of a run that found no equilibrium beyond some load);
 * ``gauges.csv``: ``time_day,pile,section,depth_m,strain,N_kN,f_kPa,w_mm`` (the virtual strain
@@ -53,20 +50,21 @@ positive down; forces kN; stresses kPa; displacements m.
   pile head's) rigid motion at the scenario's action point, global axes, z up (a settlement is
   a negative ``uz_m``);
 * ``pile_heads.csv``: ``t_day,pile,x_m,y_m,N_kN,Vx_kN,Vy_kN,Mx_kNm,My_kNm,T_kNm,depth_m``: the
-  cap's action on each pile at its head (axial force compression positive; shears, moments and
-  torque in global axes about the head centre); ``depth_m`` 0, or for tied piles the depth of
-  the uppermost section that stands for the head;
+  cap's action on each pile at its head (the load on a head without a cap; axial force
+  compression positive; shears, moments and torque in global axes about the head centre);
+  ``depth_m`` 0: the first row of the pile's ``pile_bending.csv``;
 * ``pile_bending.csv``: ``t_day,pile,depth_m,N_kN,Vx_kN,Vy_kN,Mx_kNm,My_kNm,T_kNm,ux_m,uy_m``:
-  section actions (the part above on the part below) and lateral deflection at the element
-  layers' mid-heights;
+  section actions (the part above on the part below) and the pile axis's deflection at the head
+  (depth 0) and at every element-layer boundary down to the toe;
 * ``pile_max_moment.csv``: ``t_day,pile,M_max_kNm,depth_m``: the largest resultant bending
-  moment ``sqrt(Mx^2 + My^2)`` of each pile (head included) and its depth;
+  moment ``sqrt(Mx^2 + My^2)`` of each pile's ``pile_bending.csv`` rows and its depth;
 * ``cap_stiffness.csv`` (runs with ``outputs.cap_stiffness``): ``action,ux_m,uy_m,uz_m,rx_rad,
   ry_rad,rz_rad``: rows ``Fx`` .. ``Mz`` of the cap's 6 x 6 stiffness matrix about the action
   point, ``K[i, j] = dF_i / du_j`` (:mod:`pilegroup.studies.run.stiffness`).
 
-The conventions of the last three are those of :mod:`pilegroup.studies.run.section_probe`;
-every value is the change since the geostatic state.
+The conventions of ``pile_heads.csv``, ``pile_bending.csv`` and ``pile_max_moment.csv`` are those
+of :mod:`pilegroup.studies.run.section_probe`; every force and moment is the change since the
+geostatic state.
 """
 
 from __future__ import annotations

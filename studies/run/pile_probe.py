@@ -21,9 +21,9 @@ minus adjacent soil settlement (positive = the pile moves down relative to the s
   times (``interface_layers.csv``); a layer's depths are those of the pile's shaft in it (the
   toe ends the layer the pile ends in). Normal traction: effective, kPa, tension positive;
   viscoplastic slip: magnitude, m.
-* Pile loads (``pile_loads.csv``): the axial force due to the loads at the pile's uppermost
-  section (its top element layer's mid-height, written as ``depth_m``); the head itself (the
-  cap's action on the pile) is :mod:`pilegroup.studies.run.section_probe`'s.
+* The head force of each pile (``pile_loads.csv``, ``pile_heads.csv``) is
+  :mod:`pilegroup.studies.run.section_probe`'s; :meth:`PileProbe.load_forces` (the capacity
+  curves of single piles) reads the top element layer.
 
 Every pile of the foundation is reported. In a symmetry-reduced model a pile outside the mesh
 takes the values of its mirror image, and a pile cut by a plane reports its meshed section's
@@ -54,7 +54,6 @@ from pilegroup.solver import BiotProblem
 from pilegroup.solver.probes import SettlementProbe
 from pilegroup.studies.results.tables import (
     LAYER_COLUMNS,
-    LOAD_COLUMNS,
     LOAD_SETTLEMENT_COLUMNS,
     PROFILE_COLUMNS,
     SETTLEMENT_COLUMNS,
@@ -66,7 +65,7 @@ def _sum(comm: MPI.Comm, a: np.ndarray) -> np.ndarray:
 
 
 class PileProbe:
-    """Collects pile profiles, per-layer histories and pile head loads during a run.
+    """Collects pile profiles and per-layer histories during a run.
 
     An export (:class:`~pilegroup.solver.exports.Export`): :meth:`write` at every output time;
     :meth:`record_step` after every accepted step adds the centre pile's layer means.
@@ -130,20 +129,10 @@ class PileProbe:
         self.profile_rows: list[str] = []
         self.layer_rows: list[str] = []
         self.pile_layer_rows: list[str] = []
-        self.load_rows: list[str] = []
         self._last_step_t: float | None = None
         self._N0: dict[int, np.ndarray] = {}
 
     # ------------------------------------------------------------------ quantities
-    def element_layers(self, i: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(local cells, their mid-height z, the element layers' mid-heights) of meshed pile ``i``.
-
-        The mid-heights are those below the ground surface, top down, over all ranks; the
-        cells include the part embedded in the cap (mid-height z > 0).
-        """
-        cells, zc = self._pile_cells.get(i, (np.zeros(0, np.int32), np.zeros(0)))
-        return cells, zc, self._levels[i]
-
     def axial_force(self, i: int, averages: dict | None = None
                     ) -> tuple[np.ndarray, np.ndarray]:
         """(depth of the element-layer mid-heights, axial force kN) of pile ``i``.
@@ -261,15 +250,12 @@ class PileProbe:
 
     # ------------------------------------------------------------------ recording
     def record_output(self, t: float) -> None:
-        """Profiles of every pile and pile head loads at output time ``t`` (collective)."""
+        """Profiles of every pile at output time ``t`` (collective)."""
         averages = self.body.qp.cell_average("stress")
         fields = self.nodal_fields()
         forces = self.load_forces(averages)
         for i in range(1, len(self.xy) + 1):
             dN, N = forces[self.source[i]]
-            if N.size:
-                x, y = self.xy[i - 1]
-                self.load_rows.append(f"{t:.6g},{i},{x:.6g},{y:.6g},{N[0]:.9g},{dN[0]:.6g}")
             if self._itf is not None:
                 dz, fr, rel = self.interface_profile(self.source[i], fields)
                 Nz = np.interp(dz, dN, N) if N.size else np.zeros_like(dz)
@@ -336,7 +322,6 @@ class PileProbe:
         if self.comm.rank != 0:
             return
         for name, head, rows in (("pile_profiles.csv", PROFILE_COLUMNS, self.profile_rows),
-                                 ("pile_loads.csv", LOAD_COLUMNS, self.load_rows),
                                  ("layer_history.csv", LAYER_COLUMNS, self.layer_rows),
                                  ("interface_layers.csv", LAYER_COLUMNS, self.pile_layer_rows)):
             if rows:

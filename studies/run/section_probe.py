@@ -3,20 +3,25 @@
 Sign conventions (global axes, x and y horizontal, z up; moments by the right-hand rule):
 
 * A **section** of a pile at depth ``d`` carries the action of the part above on the part
-  below: shear ``Vx = int sigma_xz``, ``Vy = int sigma_yz`` (kN), axial force ``N = -int
-  sigma_zz`` (kN, compression positive), bending moments about the section centre ``Mx = int
-  (y - y_p) sigma_zz`` and ``My = -int (x - x_p) sigma_zz`` and torque ``T = int ((x - x_p)
-  sigma_yz - (y - y_p) sigma_xz)`` (kN m). Each is the mean over an element layer of the pile
-  (exact integrals of the quadrature-point stress over the layer's cells, over its height):
-  the value at the layer's mid-height for a quantity linear in depth. The lateral deflection
-  ``ux``, ``uy`` (m) is the layer's volume mean.
-* The **head** (depth 0, the ground surface, where the pile leaves the cap): the action of the
-  cap on the pile, same components. With the pile–soil interface it is exact: minus the force
-  and moment the soil exerts on the pile through the interface (the pile below the head is a
-  free body). Tied piles have no interface: their head row is the uppermost section, and
-  ``depth_m`` says where it is.
-* Every value is the change since the first output time (the geostatic state), as the axial
-  force of ``pile_profiles.csv``: the effect of the loads and of the ground's movement.
+  below: shear ``Vx``, ``Vy`` (kN), axial force ``N`` (kN, compression positive), bending
+  moments ``Mx``, ``My`` about the section centre on the pile axis and torque ``T`` (kN m): for
+  a stress ``sigma`` on the section, ``Vx = int sigma_xz``, ``Vy = int sigma_yz``, ``N = -int
+  sigma_zz``, ``Mx = int (y - y_p) sigma_zz``, ``My = -int (x - x_p) sigma_zz``, ``T = int
+  ((x - x_p) sigma_yz - (y - y_p) sigma_xz)``. Sections are the planes of the pile's mesh: the
+  **head** (depth 0, the ground surface, where the pile enters the cap, or its loaded top
+  without a cap) and every element-layer boundary down to the toe. Each is the force the
+  cells above the plane exert on its nodes (:mod:`pilegroup.studies.run.plane_sections`): the
+  finite element's own equilibrium of the pile below the plane, exact to the Newton residual,
+  for tied piles as for piles with an interface. The head is the cap's action on the pile:
+  the heads balance the applied actions. ``ux``, ``uy`` (m): the deflection of the pile axis
+  at the plane.
+* ``pile_bending.csv`` holds every section, ``pile_heads.csv`` the head (``depth_m`` 0),
+  ``pile_max_moment.csv`` the largest resultant ``sqrt(Mx^2 + My^2)`` of the same rows and
+  its depth, ``pile_loads.csv`` the head's axial force (the same number as ``pile_heads.csv``'s
+  ``N_kN``).
+* Every force and moment is the change since the first output time (the geostatic state), as
+  the axial force of ``pile_profiles.csv``: the effect of the loads and of the ground's
+  movement.
 * The **cap motion**: the rigid motion fitted to the loaded face's displacement
   (:class:`~pilegroup.solver.probes.FaceMotion`), given at the scenario's action point:
   ``u_P = u_C + theta x (P - C)``; displacements m (z up: a settlement is negative ``uz_m``),
@@ -31,15 +36,12 @@ Every number is all-reduced over the ranks; rank 0 writes.
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 from typing import Any
 
 import numpy as np
-import ufl
-from dolfinx import fem
-from mpi4py import MPI
 
+from pilegroup.errors import ScenarioError
 from pilegroup.fileio import write_text_atomic
 from pilegroup.geometry.adapter import ResolvedGeometry
 from pilegroup.model import Scenario
@@ -50,10 +52,12 @@ from pilegroup.studies.results.tables import (
     BENDING_COLUMNS,
     CAP_MOTION_COLUMNS,
     HEAD_COLUMNS,
+    LOAD_COLUMNS,
     MAX_MOMENT_COLUMNS,
 )
 from pilegroup.studies.run.cap_loads import loaded_facets
 from pilegroup.studies.run.pile_probe import PileProbe
+from pilegroup.studies.run.plane_sections import PlaneForces
 
 #: Deflection components (ux, uy) a mirror plane makes zero / reverses.
 _DEFLECTION_ANTISYMMETRIC = {"x": (0,), "y": (1,)}
@@ -84,83 +88,24 @@ def _symmetrise(v: np.ndarray, zero: tuple[str, ...], flip: tuple[str, ...],
 
 
 class PileSections:
-    """``pile_bending.csv``, ``pile_heads.csv``, ``pile_max_moment.csv`` (module docstring).
+    """``pile_bending.csv``, ``pile_heads.csv``, ``pile_max_moment.csv``, ``pile_loads.csv``.
 
-    An export: :meth:`write` at every output time rewrites the three files.
+    One recovery for all four (module docstring): the sections of
+    :class:`~pilegroup.studies.run.plane_sections.PlaneForces`, the head its first. An export:
+    :meth:`write` at every output time rewrites the files.
     """
 
     def __init__(self, sc: Scenario, geo: ResolvedGeometry, pb: BiotProblem,
                  piles: PileProbe, out: Path) -> None:
-        self.pb, self.piles, self.out, self.comm = pb, piles, Path(out), pb.comm
+        self.out, self.comm = Path(out), pb.comm
         self.xy = [tuple(map(float, p)) for p in sc.piles.xy]
-        self.radius = [0.5 * d for d in sc.piles.diameters]
         spec = geo.spec
         self.planes = spec.cut_planes()
         self.source = spec.mirror_of()
         self.fraction = {i: spec.pile_fraction(i) for i in spec.kept_piles()}
-        body = pb.body("structure")
-        x, u, s = ufl.SpatialCoordinate(body.mesh), body.u, body.qp.stress
-        r2 = 1.0 / math.sqrt(2.0)
-        sxz, syz, szz = r2 * s[4], r2 * s[5], s[2]
-        vals = ufl.as_vector([sxz, syz, szz, x[0] * szz, x[1] * szz, x[0] * syz - x[1] * sxz,
-                              u[0], u[1], 1.0])
-        D = fem.functionspace(body.mesh, ("DG", 0, (9,)))
-        dx = ufl.Measure("dx", domain=body.mesh,
-                         metadata={"quadrature_degree": body.qp.degree})
-        self._form = fem.form(ufl.inner(vals, ufl.TestFunction(D)) * dx)
+        self.forces = PlaneForces(sc, pb, list(self.fraction))
         self.rows: dict[str, list[str]] = {"bending": [], "heads": [], "max": []}
         self._zero: dict[str, np.ndarray] = {}
-        self._nodes = self._pile_nodes(body.V) if pb.interface is not None else {}
-
-    def _pile_nodes(self, V: fem.FunctionSpace) -> dict[int, tuple[np.ndarray, np.ndarray]]:
-        """Meshed pile -> (its owned structure nodes, their arms from the head centre, m)."""
-        x = V.tabulate_dof_coordinates()[: V.dofmap.index_map.size_local]
-        out = {}
-        for i in self.fraction:
-            xp, yp = self.xy[i - 1]
-            on = np.flatnonzero(np.hypot(x[:, 0] - xp, x[:, 1] - yp)
-                                <= self.radius[i - 1] * 1.001 + _TOL)
-            out[i] = (on, x[on] - np.array([xp, yp, 0.0]))
-        return out
-
-    # ------------------------------------------------------------------ quantities
-    def sections(self) -> dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]]:
-        """Meshed pile -> (depths, (n, 6) section actions Vx, Vy, -N, Mx, My, T, (n, 2) ux, uy).
-
-        Of the meshed part of the pile (collective: one all-reduce for every pile).
-        """
-        cellvals = fem.assemble_vector(self._form).array.reshape(-1, 9)
-        levels, local = {}, []
-        for i in self.fraction:
-            cells, zc, levels[i] = self.piles.element_layers(i)
-            below = zc < 0.0
-            acc = np.zeros((levels[i].size, 9))
-            np.add.at(acc, np.searchsorted(-levels[i], -zc[below]), cellvals[cells[below]])
-            local.append(acc)
-        sums = np.split(self.comm.allreduce(np.concatenate(local), op=MPI.SUM),
-                        np.cumsum([a.shape[0] for a in local])[:-1])
-        out = {}
-        for i, acc in zip(self.fraction, sums, strict=True):
-            S = acc / PileProbe.layer_heights(levels[i])[:, None]
-            vol = np.where(acc[:, 8:9] > 0.0, acc[:, 8:9], 1.0)
-            xp, yp = self.xy[i - 1]
-            act = np.column_stack([S[:, 0], S[:, 1], S[:, 2], S[:, 4] - yp * S[:, 2],
-                                   -(S[:, 3] - xp * S[:, 2]),
-                                   S[:, 5] - xp * S[:, 1] + yp * S[:, 0]])
-            out[i] = (-levels[i], act, acc[:, 6:8] / vol)
-        return out
-
-    def heads(self) -> dict[int, np.ndarray]:
-        """Meshed pile -> the cap's action on its meshed part at the head (6,), interface only.
-
-        Minus the soil's force and moment (about the head centre) through the interface on the
-        pile's nodes (collective).
-        """
-        f = self.pb.interface_force()
-        loc = np.array([np.concatenate([f[on].sum(axis=0), np.cross(arm, f[on]).sum(axis=0)])
-                        for on, arm in self._nodes.values()])
-        tot = -self.comm.allreduce(loc, op=MPI.SUM)
-        return dict(zip(self._nodes, tot, strict=True))
 
     def _whole(self, i: int, v: np.ndarray, table: dict[str, tuple[int, ...]],
                share: bool = True) -> np.ndarray:
@@ -180,40 +125,34 @@ class PileSections:
 
     def write(self, t: float, stage: str) -> None:
         """Export protocol: every pile's sections, head and largest moment at ``t``."""
-        secs = self.sections()
-        heads = self.heads() if self.pb.interface is not None else None
+        secs = self.forces()
         for i in range(1, len(self.xy) + 1):
             depth, act, defl = secs[self.source[i]]
-            act = self._change(f"s{i}", self._whole(i, act, ANTISYMMETRIC))
+            act = self._change(f"plane{i}", self._whole(i, act, ANTISYMMETRIC))
             defl = self._whole(i, defl, _DEFLECTION_ANTISYMMETRIC, share=False)
             self.rows["bending"] += [
                 f"{t:.6g},{i},{d:.6g},{-a[2]:.9g},{a[0]:.9g},{a[1]:.9g},{a[3]:.9g},{a[4]:.9g},"
                 f"{a[5]:.9g},{u[0]:.9g},{u[1]:.9g}" for d, a, u in zip(depth, act, defl,
                                                                       strict=True)]
-            if heads is not None:
-                head = self._change(f"h{i}", self._whole(i, heads[self.source[i]],
-                                                         ANTISYMMETRIC))
-                hd = 0.0
-            else:
-                head, hd = act[0], depth[0]
+            head = act[0]
             x, y = self.xy[i - 1]
             self.rows["heads"].append(
                 f"{t:.6g},{i},{x:.6g},{y:.6g},{-head[2]:.9g},{head[0]:.9g},{head[1]:.9g},"
-                f"{head[3]:.9g},{head[4]:.9g},{head[5]:.9g},{hd:.6g}")
+                f"{head[3]:.9g},{head[4]:.9g},{head[5]:.9g},{depth[0]:.6g}")
             m = np.hypot(act[:, 3], act[:, 4])
-            cand = np.concatenate([[math.hypot(head[3], head[4])], m])
-            where = np.concatenate([[hd], depth])
-            j = int(np.argmax(cand))
-            self.rows["max"].append(f"{t:.6g},{i},{cand[j]:.9g},{where[j]:.6g}")
+            j = int(np.argmax(m))
+            self.rows["max"].append(f"{t:.6g},{i},{m[j]:.9g},{depth[j]:.6g}")
         self._write()
 
     def _write(self) -> None:
         if self.comm.rank != 0:
             return
-        for name, head, key in (("pile_bending.csv", BENDING_COLUMNS, "bending"),
-                                ("pile_heads.csv", HEAD_COLUMNS, "heads"),
-                                ("pile_max_moment.csv", MAX_MOMENT_COLUMNS, "max")):
-            write_text_atomic(self.out / name, "\n".join([head, *self.rows[key]]) + "\n")
+        loads = [",".join(r.split(",")[:5] + ["0"]) for r in self.rows["heads"]]
+        for name, head, rows in (("pile_bending.csv", BENDING_COLUMNS, self.rows["bending"]),
+                                 ("pile_heads.csv", HEAD_COLUMNS, self.rows["heads"]),
+                                 ("pile_max_moment.csv", MAX_MOMENT_COLUMNS, self.rows["max"]),
+                                 ("pile_loads.csv", LOAD_COLUMNS, loads)):
+            write_text_atomic(self.out / name, "\n".join([head, *rows]) + "\n")
 
     def close(self) -> None:
         """Nothing stays open (every table is rewritten atomically at each write)."""
@@ -224,9 +163,18 @@ class PileSections:
                 "zero": {k: v.tolist() for k, v in self._zero.items()}}
 
     def restore_state(self, data: dict[str, Any]) -> None:
-        """Continue from :meth:`saved_state`."""
+        """Continue from :meth:`saved_state`.
+
+        A checkpoint of the element-layer means these files held before (its zeros named
+        ``s1``, ``h1``, ...) cannot continue them: refused, the run is to be started again.
+        """
+        zero = data["zero"]
+        if zero and not any(k.startswith("plane") for k in zero):
+            raise ScenarioError("--resume", "checkpoint", "its pile sections are element-layer "
+                                "means, which pile_bending.csv no longer holds; run again "
+                                "without --resume")
         self.rows = {k: list(v) for k, v in data["rows"].items()}
-        self._zero = {k: np.array(v, dtype=float) for k, v in data["zero"].items()}
+        self._zero = {k: np.array(v, dtype=float) for k, v in zero.items()}
 
 
 class CapMotion:

@@ -16,7 +16,9 @@ Soil linear elastic and drained (permeable, loaded over a day), piles and cap co
   discretisation (Q2Q1 for horizontal actions, the automatic mesh). Tolerance 5 %: Randolph
   fitted his own finite element runs to about 10 %; Q2Q1 converges to about 4.5 % below his
   deflection and 4.5 % above his rotation (docs/model.md, "Cap actions"); the block (40 m x
-  40 m, 30 m deep, rollers on the sides, fixed bottom) is stiffer than the half-space.
+  40 m, 30 m deep, rollers on the sides, fixed bottom) is stiffer than the half-space. The
+  details give the pile's head section (``pile_bending.csv`` at depth 0: H and M, statics) and
+  its largest moment with its depth.
 * ``cap-equilibrium``: a 3 x 3 group under a cap, the piles joined to the soil by the elastic
   interface, under all six actions at once about a point off the cap centre: the pile heads'
   forces and moments, moved to that point, balance the applied actions, every component, to
@@ -41,7 +43,7 @@ import numpy as np
 from mpi4py import MPI
 
 from pilegroup.model import scenario_from_dict
-from pilegroup.studies.results.tables import CAP_MOTION_CSV, HEADS_CSV, Table
+from pilegroup.studies.results.tables import BENDING_CSV, CAP_MOTION_CSV, HEADS_CSV, Table
 from pilegroup.studies.verification.common import run_pipeline, world
 from pilegroup.studies.verification.registry import CaseResult, register
 
@@ -163,9 +165,11 @@ def lateral_single_pile(size: str = "fast", comm: MPI.Comm | None = None,
     doc = lateral_scenario("single", size)
     if pair is not None:
         doc.setdefault("numerics", {})["element"] = pair
-    tables, n = run_pipeline(doc, comm, (CAP_MOTION_CSV,))
+    tables, n = run_pipeline(doc, comm, (CAP_MOTION_CSV, BENDING_CSV))
     motion = _last(tables[CAP_MOTION_CSV])
     u, theta = float(motion["ux_m"][0]), float(motion["ry_rad"][0])
+    prof = _last(tables[BENDING_CSV])
+    top = int(np.argmax(np.abs(prof["My_kNm"])))
     G = E_SOIL / (2.0 * (1.0 + NU_SOIL))
     u_ref, t_ref, lc = randolph_head(H_LAT, M_LAT, D_LAT, E_PILE, G, NU_SOIL)
     err_u, err_t = abs(u - u_ref) / u_ref, abs(theta - t_ref) / t_ref
@@ -177,6 +181,11 @@ def lateral_single_pile(size: str = "fast", comm: MPI.Comm | None = None,
                   "and rotation under H and M at the ground surface",
         details={"u_m": u, "u_ref_m": u_ref, "theta_rad": theta, "theta_ref_rad": t_ref,
                  "u_error": err_u, "theta_error": err_t, "critical_length_m": lc,
+                 "head_section": {"depth_m": float(prof["depth_m"][0]),
+                                  "Vx_kN": float(prof["Vx_kN"][0]),
+                                  "My_kNm": float(prof["My_kNm"][0])},
+                 "largest_moment": {"My_kNm": float(prof["My_kNm"][top]),
+                                    "depth_m": float(prof["depth_m"][top])},
                  "stiffer_by": {"u": 1.0 - u / u_ref, "theta": 1.0 - theta / t_ref},
                  "element": scenario_from_dict(doc).numerics.element, "ranks": comm.size})
 

@@ -226,6 +226,8 @@ CATALOGUE: dict[str, tuple[str, ...]] = {
     "studies/run/auto_preset.py::auto_preset": (G,),  # the table's last row matches any size
     "studies/run/checkpoint.py::check_resume": (F,) * 6,  # --resume and the folder's checkpoint
     "studies/run/checkpoint.py::Checkpoints.restore": (F,),
+    # a checkpoint whose pile sections are of another kind: the folder, not the scenario
+    "studies/run/section_probe.py::PileSections.restore_state": (F,),
     "studies/run/folder_lock.py::folder_lock": (F,),  # --out held by another run
     "studies/run/job.py::run_scenario": (CL,),  # --stop-after with --resume
     "studies/run/memory_check.py::memory_check": ("machine",),  # the memory available
