@@ -22,7 +22,7 @@ study validated, docs/results.md):
 * ``dz_cap_m = min(1.5 d, cap thickness)``; ``min_layer_divisions = 2`` (every layer at least
   two elements thick, so thin layers set their own sizes);
 * with ``Q2Q1``: ``size_m = min(2 d, clear gap)``, twice every vertical length (the cap's at
-  most its thickness) and ``n_circ_min = 16`` (:data:`Q2_LENGTH`).
+  most its thickness), ``n_circ_min = 16`` and ``min_layer_divisions = 1`` (:data:`Q2_LENGTH`).
 
 Memory budget: when the estimated unknowns (:func:`estimated_unknowns`) of the part the run
 models (the whole block, or the half or quarter its mirror symmetry allows,
@@ -79,8 +79,8 @@ def nominal_sizes(sc: EstimatedScenario, scale: float = 1.0, element: str = "Q1Q
     """The automatic sizes of every ``numerics.mesh`` key before the memory budget (m, -).
 
     ``element``: ``Q2Q1`` takes :data:`Q2_LENGTH` times the lengths next to and along the
-    piles and :data:`N_CIRC_Q2` edges around a pile (a quadratic element spans what two
-    trilinear ones do). ``scale`` (``numerics.mesh.scale``) multiplies every length and
+    piles, :data:`N_CIRC_Q2` edges around a pile and one element across a thin layer (a
+    quadratic element spans what two trilinear ones do: three nodes across the layer). ``scale`` (``numerics.mesh.scale``) multiplies every length and
     divides the edges around a pile (to the nearest multiple of 4, at least 8): a refinement
     study's one knob.
     """
@@ -94,6 +94,7 @@ def nominal_sizes(sc: EstimatedScenario, scale: float = 1.0, element: str = "Q1Q
         out["far_field_size_m"] = max(out["far_field_size_m"], out["size_m"])
         if sc.cap is not None:
             out["dz_cap_m"] = min(out["dz_cap_m"], sc.cap.thickness_m)
+        out["min_layer_divisions"] = 1
     for k in LENGTHS:
         out[k] = out[k] * scale
     out["n_circ_min"] = max(8, 4 * round(n_circ / scale / 4))
@@ -145,7 +146,7 @@ def resolve_mesh(sc: EstimatedScenario, given: Mapping[str, float | int], elemen
     step = 0
     for step, (factor, n_circ, divisions) in enumerate(STEPS):  # noqa: B007 - returned
         sizes = dict(nominal, n_circ_min=min(n_circ, nominal["n_circ_min"]),
-                     min_layer_divisions=divisions)
+                     min_layer_divisions=min(divisions, nominal["min_layer_divisions"]))
         for k in LENGTHS:
             sizes[k] = min(nominal[k] * factor, DZ_MAX)
         sizes["size_m"] = min(sizes["size_m"], size_max)

@@ -133,7 +133,12 @@ def test_horizontal_actions_choose_q2q1_where_it_fits_with_a_reason():
     sc = scenario_from_dict(small)
     assert sc.numerics.element == "Q2Q1"
     assert sc.discretisation_warning() is None
-    pier = scenario_from_dict(doc("pier667_lateral"))
+    pier = scenario_from_dict(doc("pier667_lateral"))  # its half model fits
+    assert pier.numerics.element == "Q2Q1" and pier.numerics.mesh.min_layer_divisions == 1
+    assert pier.discretisation_warning() is None
+    whole = doc("pier667_lateral")
+    whole.setdefault("numerics", {})["symmetry"] = "none"  # the whole block does not
+    pier = scenario_from_dict(whole)
     assert pier.numerics.element == "Q1Q1"
     assert "memory budget" in pier.numerics.element_reason
     warning = pier.discretisation_warning()
