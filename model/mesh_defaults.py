@@ -80,9 +80,9 @@ def nominal_sizes(sc: EstimatedScenario, scale: float = 1.0, element: str = "Q1Q
 
     ``element``: ``Q2Q1`` takes :data:`Q2_LENGTH` times the lengths next to and along the
     piles, :data:`N_CIRC_Q2` edges around a pile and one element across a thin layer (a
-    quadratic element spans what two trilinear ones do: three nodes across the layer). ``scale`` (``numerics.mesh.scale``) multiplies every length and
-    divides the edges around a pile (to the nearest multiple of 4, at least 8): a refinement
-    study's one knob.
+    quadratic element spans what two trilinear ones do: three nodes across the layer).
+    ``scale`` (``numerics.mesh.scale``) multiplies every length and divides the edges around a
+    pile (to the nearest multiple of 4, at least 8): a refinement study's one knob.
     """
     out = _nominal(sc)
     n_circ = N_CIRC
