@@ -25,18 +25,6 @@ def _rows(path):
         return list(csv.reader(fh))
 
 
-def _noisy(path, column, seed, out):
-    """``path`` with ``column`` times (1 + 0.02 N(0, 1)), written to ``out``."""
-    rows = _rows(path)
-    i = rows[0].index(column)
-    rng = np.random.default_rng(seed)
-    for r in rows[1:]:
-        r[i] = f"{float(r[i]) * (1.0 + 0.02 * rng.standard_normal()):.10g}"
-    with open(out, "w", newline="") as fh:
-        csv.writer(fh, lineterminator="\n").writerows(rows)
-    return out
-
-
 def _fit_json(argv, capsys):
     capsys.readouterr()
     assert main([*argv, "--json"]) == 0
@@ -97,10 +85,10 @@ def test_lab_triaxial_reaches_the_closed_form_strength(tmp_path):
 
 
 @pytest.mark.parametrize("layer", LAYERS)
-def test_round_trip_shear(layer, tmp_path, capsys):
+def test_round_trip_shear(noisy, layer, tmp_path, capsys):
     assert main(["lab", "interface-shear", "--scenario", "pier667", "--layer", layer,
                  "--variant", "default", "--steps", "400", "--out", str(tmp_path)]) == 0
-    data = _noisy(tmp_path / "interface-shear.csv", "shear_stress_kPa", 0,
+    data = noisy(tmp_path / "interface-shear.csv", "shear_stress_kPa", 0,
                   tmp_path / "noisy.csv")
     got = _fit_json(["fit", "interface-shear", str(data)], capsys)
     true = dict(lab_material({}, "pier667", layer).values)
@@ -112,10 +100,10 @@ def test_round_trip_shear(layer, tmp_path, capsys):
 
 
 @pytest.mark.parametrize("layer", LAYERS)
-def test_round_trip_creep(layer, tmp_path, capsys):
+def test_round_trip_creep(noisy, layer, tmp_path, capsys):
     assert main(["lab", "interface-creep", "--scenario", "pier667", "--layer", layer,
                  "--variant", "default", "--out", str(tmp_path)]) == 0
-    data = _noisy(tmp_path / "interface-creep.csv", "slip_m", 1, tmp_path / "noisy.csv")
+    data = noisy(tmp_path / "interface-creep.csv", "slip_m", 1, tmp_path / "noisy.csv")
     got = _fit_json(["fit", "interface-creep", str(data), "--scenario", "pier667",
                      "--layer", layer], capsys)
     true = dict(lab_material({}, "pier667", layer).values)
@@ -156,12 +144,12 @@ def test_bad_data_fewer_points_than_parameters(tmp_path, capsys):
     _one_error_line(capsys, "d.csv", "2 data points", "4 parameters")  # slip > 0
 
 
-def test_fit_that_cannot_converge(tmp_path, capsys):
+def test_fit_that_cannot_converge(noisy, tmp_path, capsys):
     """Mud at 25 kPa: the default reading never creeps, so no eta explains a noisy creep."""
     assert main(["lab", "interface-creep", "--scenario", "pier667", "--layer", "mud",
                  "--variant", "default", "--normal-stresses-kPa", "25", "--out",
                  str(tmp_path)]) == 0
-    data = _noisy(tmp_path / "interface-creep.csv", "slip_m", 2, tmp_path / "noisy.csv")
+    data = noisy(tmp_path / "interface-creep.csv", "slip_m", 2, tmp_path / "noisy.csv")
     assert main(["fit", "interface-creep", str(data), "--scenario", "pier667", "--layer",
                  "mud"]) == 1
     _one_error_line(capsys, "failed", "do not determine eta_MPa_day")

@@ -142,23 +142,11 @@ def test_time_matters_for_ssc_not_for_mcc(tmp_path):
     assert more[3] == pytest.approx(SSC["mu_star"] * np.log(10.0), rel=0.1)
 
 
-def _noisy(path, seed, out):
-    with open(path, newline="") as fh:
-        rows = list(csv.reader(fh))
-    i = rows[0].index("vertical_strain")
-    rng = np.random.default_rng(seed)
-    for r in rows[1:]:
-        r[i] = f"{float(r[i]) * (1.0 + 0.02 * rng.standard_normal()):.10g}"
-    with open(out, "w", newline="") as fh:
-        csv.writer(fh, lineterminator="\n").writerows(rows)
-    return out
-
-
 @pytest.mark.parametrize("ocr", [1.0, 2.0])
-def test_fit_oedometer_round_trip(ocr, tmp_path, capsys):
+def test_fit_oedometer_round_trip(noisy, ocr, tmp_path, capsys):
     values = {**SSC, "OCR": ocr}
     _lab("oedometer", "soft_soil_creep", values, tmp_path, *SHORT, "--substeps-per-decade", "5")
-    data = _noisy(tmp_path / "oedometer.csv", 0, tmp_path / "noisy.csv")
+    data = noisy(tmp_path / "oedometer.csv", "vertical_strain", 0, tmp_path / "noisy.csv")
     capsys.readouterr()
     assert main(["fit", "oedometer", str(data), "--phi_deg", "25", "--substeps-per-decade",
                  "5", "--json"]) == 0
