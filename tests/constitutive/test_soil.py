@@ -186,24 +186,6 @@ def test_dp_returns_on_surface(s, seed, psi):
         assert np.array_equal(sig, sig_tr)
 
 
-def fd_tangent(law, de, state, h):
-    """Central differences; also returns, per point, whether all 12 stencil evaluations stay
-    in the return branch of the centre (a stencil across a region boundary is not a test of
-    the tangent)."""
-    _, t0, _ = law.update(de, state, 0.0)
-    mode = t0["mode"][:, 0]
-    D = np.empty((de.shape[0], 6, 6))
-    same = np.ones(de.shape[0], dtype=bool)
-    for j in range(6):
-        e = np.zeros(6)
-        e[j] = h
-        sp, tp, _ = law.update(de + e, state, 0.0)
-        sm, tm, _ = law.update(de - e, state, 0.0)
-        D[:, :, j] = (sp - sm) / (2 * h)
-        same &= (tp["mode"][:, 0] == mode) & (tm["mode"][:, 0] == mode)
-    return D, same
-
-
 @pytest.mark.parametrize(
     "law",
     [MohrCoulomb(**soil_kwargs(2)), MohrCoulomb(**soil_kwargs(5), psi_deg=10.0),
@@ -211,7 +193,7 @@ def fd_tangent(law, de, state, h):
      DruckerPrager(**soil_kwargs(5), psi_deg=10.0)],
     ids=["mc-mud", "mc-silt-psi10", "mc-gravel-assoc", "dp-mud", "dp-silt-psi10"],
 )
-def test_tangent_fd(law):
+def test_tangent_fd(law, fd_tangent):
     """Consistent tangent vs central differences: 1e-6 relative (Frobenius, per point)."""
     rng = np.random.default_rng(3)
     n = 300
