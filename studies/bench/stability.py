@@ -217,7 +217,7 @@ def _soft_soil_cases(sc: Scenario) -> list[StressCase]:
     """
     load = [(i, st.cap_load_kN) for i, st in enumerate(sc.stages) if st.kind == "load"]
     last, end = len(sc.stages) - 1, sc.time.end_day
-    t_last = sc.time.start_day + sum(st.duration_day or 0.0 for st in sc.stages[:-1])
+    t_last = sc.stage_times()[-1][1]  # the last stage's start
     x10 = tuple(f"stages[{i}].cap_load_kN={_num(q * 10.0)}" for i, q in load)
     unload = (f'stages[{last}].kind="load"', f"stages[{last}].cap_load_kN=0.0",
               f"stages[{last}].duration_day={_num(end - t_last)}")
