@@ -10,9 +10,10 @@ units kN, m, day; tension positive; ``p`` excess pore pressure, compression posi
 * mass balance, backward Euler (multiplied by dt):
   ``S (p - p_n) + div(u - u_n) - dt div((k/GAMMA_W) grad p) = 0``, ``S = n / K_w``, in the
   saturated soil (the dry soil's pressure unknowns are held, ``solver/constraints.py``);
-* pressure stabilisation of Q1-Q1: ``tau int (J J^T / 12) grad(p - p_n) . grad q``, a
+* pressure stabilisation of both pairs: ``tau int (J J^T / 12) grad(p - p_n) . grad q``, a
   pressure Laplacian in each cell's own metric (``J`` the Jacobian of the map from the unit
-  cube), ``tau = 3 / (lambda + 2 mu)`` per soil material (:func:`projection_tau`);
+  cube), ``tau = 3 / (lambda + 2 mu)`` (Q1-Q1) or ``2 / (lambda + 2 mu)`` (Q2-Q1) per soil
+  material (:func:`projection_tau`);
 * surface loads: ``int c n . v`` with a Constant pressure per load;
 * interface: the law's effective traction plus the excess pore pressure on the pile surfaces;
 * fixed-stress preconditioning term ``(1/K_dr) M`` on the pressure block.
@@ -93,20 +94,33 @@ class BlockForms:
             J[i][j] = form if J[i][j] is None else J[i][j] + form
 
 
-def projection_tau(K: float, G: float) -> float:
-    """Q1-Q1 stabilisation parameter ``tau = 3 / (lambda + 2 mu) = 3 / (K + 4 G / 3)``, 1/kPa.
+#: ``tau (lambda + 2 mu)`` of each element pair (:func:`projection_tau`).
+TAU_SCALE = {"Q1Q1": 3.0, "Q2Q1": 2.0}
+
+
+def projection_tau(K: float, G: float, pair: str = "Q1Q1") -> float:
+    """Pressure stabilisation parameter ``tau = TAU_SCALE[pair] / (lambda + 2 mu)``, 1/kPa.
 
     Source: the stabilised linear pair of Aguilar, Gaspar, Lisbona & Rodrigo (Int. J. Numer.
     Meth. Engng 75, 2008, 1282-1300) and Rodrigo, Gaspar, Hu & Zikatanov (Comput. Methods Appl.
     Mech. Engrg 298, 2016, 183-204) adds ``beta int grad(p - p_n) . grad q`` to the mass balance
-    with ``beta = h^2 / (4 (lambda + 2 mu))``. In 1D the undrained pressure operator is
-    ``1/(lambda + 2 mu)`` times the one-point mass matrix (the strain is constant per cell);
-    with ``beta`` it becomes ``1/(lambda + 2 mu)`` times the lumped mass matrix, an M-matrix,
-    and the pressure is monotone at any time step. The term of :meth:`FormBuilder.stabilisation`
-    is ``tau (h_n^2 / 12)`` in each direction ``n`` of a box cell, so ``tau h_n^2 / 12 = beta``
-    gives ``tau = 3 / (lambda + 2 mu)`` with each direction's own cell size (docs/solver.md).
+    and chooses ``beta`` from the 1D undrained pressure operator, ``1/(lambda + 2 mu)`` times a
+    mass matrix in which the element's strains are exact:
+
+    * Q1-Q1: the strain is constant per cell, the one-point mass matrix ``h/4 [1 1; 1 1]``
+      (the checkerboard in its kernel); ``beta = h^2 / (4 (lambda + 2 mu))`` adds
+      ``h/4 [1 -1; -1 1]`` and makes it the lumped mass matrix ``h/2 I``;
+    * Q2-Q1: the strain is linear per cell, the consistent mass matrix ``h/6 [2 1; 1 2]``
+      (positive off-diagonal: the pressure overshoots next to a drained face when the step
+      is short, ``dt < h^2 / (6 c_v)``); ``beta = h^2 / (6 (lambda + 2 mu))`` adds
+      ``h/6 [1 -1; -1 1]`` and makes it the same ``h/2 I``.
+
+    An M-matrix: the pressure is monotone at any time step. The term of
+    :meth:`FormBuilder.stabilisation` is ``tau (h_n^2 / 12)`` in each direction ``n`` of a box
+    cell, so ``tau h_n^2 / 12 = beta`` gives ``tau = 3 / (lambda + 2 mu)`` (Q1-Q1) and
+    ``2 / (lambda + 2 mu)`` (Q2-Q1) with each direction's own cell size (docs/solver.md).
     """
-    return 3.0 / (K + 4.0 * G / 3.0)
+    return TAU_SCALE[pair] / (K + 4.0 * G / 3.0)
 
 
 #: Smallest mean effective stress (kPa) at which a stress-dependent law's moduli are taken.
@@ -139,7 +153,7 @@ class Coefficients:
     weight the skeleton carries (kN/m^3: buoyant, total above the water table; solids take that
     of the layer they replace), ``sat`` 1 in saturated cells and 0 above the water table
     (``None`` when no soil is above it), ``tau`` stabilisation
-    ``stab_factor * projection_tau(K, G)`` (1/kPa), ``beta`` fixed-stress ``1/K`` (1/kPa); the
+    ``stab_factor * projection_tau(K, G, pair)`` (1/kPa), ``beta`` fixed-stress ``1/K`` (1/kPa); the
     moduli are those of each material's elastic part (the elastic moduli of a plastic soil; a
     stress-dependent one's at its layer's mid-depth, :func:`representative_moduli`).
     """
@@ -168,7 +182,7 @@ class Coefficients:
                 self.mob_h.x.array[cells] = mat.mobility_h * wet
             dry = mat.gamma_sat if mat.gamma_unsat is None else mat.gamma_unsat
             self.gam.x.array[cells] = np.where(wet, mat.gamma_sat - GAMMA_W, dry)
-            self.tau.x.array[cells] = disc.stab_factor * projection_tau(K, G) * wet
+            self.tau.x.array[cells] = disc.stab_factor * projection_tau(K, G, disc.pair) * wet
             self.beta.x.array[cells] = 1.0 / K * wet
             if self.sat is not None:
                 self.sat.x.array[cells] = wet
@@ -291,15 +305,15 @@ class FormBuilder:
         return c.mob_h * (gp[0] * gq[0] + gp[1] * gq[1]) + c.mob * gp[2] * gq[2]
 
     def stabilisation(self) -> None:
-        """Pressure stabilisation of the equal-order pair: a Laplacian in the cell's metric.
+        """Pressure stabilisation: a Laplacian in the cell's metric (both pairs).
 
         ``tau int (J J^T / 12) grad(p - p_n) . grad q`` on the soil cells, ``J`` the Jacobian
         of the map from the unit cube (its columns are the cell's edge vectors), ``tau`` of
         :func:`projection_tau`. On a box cell of sides ``h_x, h_y, h_z`` it is
-        ``tau (h_i^2 / 12) int d_i p d_i q`` in each direction: Rodrigo et al.'s
-        ``beta = h^2 / (4 (lambda + 2 mu))`` with each direction's own ``h`` (a monotone 1D
-        pressure in a drained step of any size). It is positive semi-definite on every cell,
-        graded, stretched or not a parallelepiped (docs/solver.md, "Q1-Q1 stabilisation").
+        ``tau (h_i^2 / 12) int d_i p d_i q`` in each direction: the ``beta`` of
+        :func:`projection_tau` with each direction's own ``h`` (a monotone 1D pressure in a
+        drained step of any size). It is positive semi-definite on every cell,
+        graded, stretched or not a parallelepiped (docs/solver.md, "Pressure stabilisation").
         """
         lay, tau, q, dp = self.layout, self.coef.tau, self.q, self.dp
         J = ufl.Jacobian(lay.mesh)

@@ -214,8 +214,8 @@ class Discretisation:
 
     Attributes:
         pair: ``"Q2Q1"`` (Taylor–Hood on hexahedra, inf-sup stable) or ``"Q1Q1"`` (equal order).
-        stabilise: Q1Q1's pressure Laplacian in each cell's metric (docs/solver.md).
-        stab_factor: multiplies its ``tau = 3 / (lambda + 2 mu)`` (``forms.projection_tau``).
+        stabilise: the pressure Laplacian in each cell's metric (both pairs; docs/solver.md).
+        stab_factor: multiplies its ``tau`` (``forms.projection_tau``).
     """
 
     pair: Literal["Q2Q1", "Q1Q1"] = "Q2Q1"

@@ -177,7 +177,7 @@ class BiotProblem(MonolithicAlgebra):
         fb.momentum(self_weight)
         self._load_consts = fb.surface_loads(loads)
         fb.mass_balance()
-        self.stabilised = self.disc.pair == "Q1Q1" and self.disc.stabilise
+        self.stabilised = self.disc.stabilise
         if self.stabilised:
             fb.stabilisation()
         if self.interface is not None:

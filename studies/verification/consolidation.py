@@ -458,7 +458,7 @@ def first_step_oscillation(pair: str = "Q2Q1", stabilise: bool = True, nz: int =
     ``T_first = 0`` is the undrained loading step (``dt = 0``); a small positive ``T_first``
     adds one drained step of that time factor, or, with ``undrained_first = False``, applies
     the load in that one drained step from rest. Uniform mesh of ``nz`` cells, same data as
-    :func:`terzaghi`; ``stab_factor`` scales the Q1-Q1 stabilisation
+    :func:`terzaghi`; ``stab_factor`` scales the pressure stabilisation
     (:class:`~pilegroup.solver.Discretisation`). Returns ``{"measure", "profile", "z", "p0",
     "nodes"}``: ``profile`` at vertices and quarter points by increasing depth ``z`` (m,
     negative), ``nodes`` its values at the vertices (the Q1 pressure nodes, top first).

@@ -23,7 +23,12 @@ def test_out_of_core_factors_give_the_in_core_answer(tmp_path, monkeypatch, smal
     (tmp_path / "scratch").mkdir()
     monkeypatch.setattr(tempfile, "tempdir", None)  # TMPDIR read anew
     sc = load_scenario(small_pile)
-    sc = dataclasses.replace(sc, interface=dataclasses.replace(sc.interface, mode="viscoplastic"))
+    # Newton to 1e-11: the out-of-core solve reads the factors back block by block and rounds
+    # differently from the in-core one, so at the default tolerance (1e-8) the two runs stop at
+    # iterates 1.3e-8 apart (measured); converged further, they agree to round-off (1.6e-12).
+    sc = dataclasses.replace(
+        sc, interface=dataclasses.replace(sc.interface, mode="viscoplastic"),
+        numerics=dataclasses.replace(sc.numerics, newton_rtol=1e-11))
     md = build_mesh(geometry_spec(sc), MPI.COMM_WORLD)
     out = {}
     for preset in ("direct_reuse", "direct_reuse_ooc"):
@@ -36,7 +41,7 @@ def test_out_of_core_factors_give_the_in_core_answer(tmp_path, monkeypatch, smal
     assert out["direct_reuse"][2] == []  # in core: no folder
     w, newton, folders, files = out["direct_reuse_ooc"]
     assert len(folders) == 1 and files  # this rank's folder, MUMPS's factor files in it
-    assert w == pytest.approx(out["direct_reuse"][0], rel=1e-8)
+    assert w == pytest.approx(out["direct_reuse"][0], rel=1e-10)
     assert newton == out["direct_reuse"][1]
 
 

@@ -15,9 +15,10 @@ equilibrium gives q = sigma'_zz + p = M (-eps_v) + p with M = 1 / m_v the oedome
 (Verruijt, Theory and Problems of Poroelasticity, 2016, ch. 2: the initial pressure of the
 oedometer test; with incompressible water S = 0 and p0 = q).
 
-The Q1-Q1 parameter tau = 3 / (lambda + 2 mu) (``solver/forms.py::projection_tau``,
-docs/solver.md) makes the column's undrained pressure operator the lumped mass matrix for any
-cell heights, widths and Poisson's ratio; a tau half as large overshoots.
+The stabilisation parameter tau = 3 / (lambda + 2 mu) (Q1-Q1) or 2 / (lambda + 2 mu) (Q2-Q1)
+(``solver/forms.py::projection_tau``, docs/solver.md) makes the column's undrained pressure
+operator the lumped mass matrix for any cell heights, widths and Poisson's ratio; a tau half as
+large overshoots, and so does Taylor-Hood without the term.
 """
 
 import numpy as np
@@ -62,38 +63,37 @@ def test_undrained_pressure_is_the_columns_own():
     assert 0.99 < undrained_pressure() / TerzaghiColumn().q < 1.0  # water nearly incompressible
 
 
-def test_q1q1_at_a_tiny_step_has_no_oscillation():
-    r = tiny_step("Q1Q1")
+@pytest.mark.parametrize("pair", ["Q1Q1", "Q2Q1"])
+def test_a_tiny_step_has_no_oscillation(pair):
+    r = tiny_step(pair)
     assert r["max_error"] < TOL, r["nodes"]
     assert r["adjacent"] < TOL, r["nodes"]
 
 
-def test_q1q1_with_half_the_parameter_overshoots():
-    r = tiny_step("Q1Q1", stab_factor=0.5)
+@pytest.mark.parametrize("pair", ["Q1Q1", "Q2Q1"])
+def test_half_the_parameter_overshoots(pair):
+    r = tiny_step(pair, stab_factor=0.5)
     assert r["max_error"] > 5 * TOL, r["nodes"]
 
 
+def test_unstabilised_taylor_hood_overshoots():
+    """Without the term Q2-Q1 overshoots next to the drained node (1D: 1.267 p0, then 0.93)."""
+    r = ver.first_step_oscillation("Q2Q1", False, nz=16, T_first=T_STEP, undrained_first=False)
+    r = errors(r["nodes"], undrained_pressure())
+    assert r["max_error"] > 10 * TOL, r["nodes"]
+
+
+@pytest.mark.parametrize("pair", ["Q1Q1", "Q2Q1"])
 @pytest.mark.parametrize("nu", [0.3, 0.42])
-def test_q1q1_on_graded_flat_cells_has_no_oscillation(nu):
+def test_graded_flat_cells_have_no_oscillation(nu, pair):
     """A 3 m x 0.5 m column of 12 cells graded 1:4 (0.38 m at the top, 1.52 m at the bottom)."""
     soil = ElasticSoil(nu=nu)
     col = TerzaghiColumn(soil=soil)
     z = graded_levels(-col.H, 0.0, 12, ratio=4.0)
     md = build_box(MPI.COMM_WORLD, (0.0, 3.0), (0.0, 0.5), z, 1, 1)
-    pb = col.problem(md, Discretisation(pair="Q1Q1"))
+    pb = col.problem(md, Discretisation(pair=pair))
     info = pb.solve_step(T_STEP * col.H**2 / col.cv, 1.0)
     assert info.converged, info.message
     r = errors(p_along(pb, z[::-1], 1.5, 0.25), undrained_pressure(soil))
-    assert r["max_error"] < TOL, r["nodes"]
-    assert r["adjacent"] < TOL, r["nodes"]
-
-
-# Taylor-Hood has no stabilisation term: it overshoots next to the drained node (measured: max
-# |p| = 1.267 p0 at the first node below it, 0.929 p0 at the next). Strict: the test fails once
-# a change removes the overshoot.
-@pytest.mark.xfail(strict=True, raises=AssertionError,
-                   reason="Q2-Q1: max |p| 1.267 p0 next to the drained node, 0.929 p0 below it")
-def test_q2q1_at_a_tiny_step():
-    r = tiny_step("Q2Q1")
     assert r["max_error"] < TOL, r["nodes"]
     assert r["adjacent"] < TOL, r["nodes"]
