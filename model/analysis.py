@@ -284,15 +284,16 @@ class Numerics:
     and the cap are mirror-symmetric about (the block is centred by construction, the loads are
     uniform on the cap top or the pile heads).
 
-    ``element``: ``Q1Q1`` (trilinear displacement and pressure, stabilised), ``Q2Q1``
-    (triquadratic displacement, Taylor–Hood) or ``auto`` (default): Q2Q1 where trilinear
-    hexahedra lock (horizontal actions, a capacity stage in plastic soil) and it fits the memory
-    budget, else Q1Q1 (:mod:`pilegroup.model.mesh_defaults`). A :class:`Scenario
-    <pilegroup.model.scenario.Scenario>` always holds the resolved pair.
+    ``element``: ``Q1Q1`` (trilinear displacement and pressure), ``Q2Q1`` (triquadratic
+    displacement, Taylor–Hood), each with its pressure stabilisation, or ``auto`` (default):
+    Q2Q1 where trilinear hexahedra lock (horizontal actions, a capacity stage in plastic soil)
+    and it fits the memory budget, else Q1Q1 (:mod:`pilegroup.model.mesh_defaults`). A
+    :class:`Scenario <pilegroup.model.scenario.Scenario>` always holds the resolved pair.
     """
 
     element: Literal["auto", "Q2Q1", "Q1Q1"] = "auto"
-    """The element pair: Taylor-Hood, trilinear (stabilised), or ``auto``: the one that fits."""
+    """The element pair: Taylor-Hood or trilinear (each with its pressure stabilisation), or
+    ``auto``: the one that fits."""
     newton_rtol: float = 1.0e-8
     """Newton's tolerance relative to each block's reference residual."""
     newton_atol: float = field(default=1.0e-9, metadata={"unit": "kN, m^3"})
