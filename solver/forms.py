@@ -98,7 +98,7 @@ class BlockForms:
 TAU_SCALE = {"Q1Q1": 3.0, "Q2Q1": 2.0}
 
 
-def projection_tau(K: float, G: float, pair: str = "Q1Q1") -> float:
+def projection_tau(K: float, G: float, pair: str) -> float:
     """Pressure stabilisation parameter ``tau = TAU_SCALE[pair] / (lambda + 2 mu)``, 1/kPa.
 
     Source: the stabilised linear pair of Aguilar, Gaspar, Lisbona & Rodrigo (Int. J. Numer.

@@ -177,8 +177,7 @@ class BiotProblem(MonolithicAlgebra):
         fb.momentum(self_weight)
         self._load_consts = fb.surface_loads(loads)
         fb.mass_balance()
-        self.stabilised = self.disc.stabilise
-        if self.stabilised:
+        if self.disc.stabilise:
             fb.stabilisation()
         if self.interface is not None:
             fb.interface(self.interface)
