@@ -155,3 +155,46 @@ def test_split_lu_blocks_are_single_precision(monkeypatch):
     opts = linsolve.merged_options("fieldsplit_kept")
     assert opts["fieldsplit_p_pc_precision"] == opts["fieldsplit_structure_pc_precision"] \
         == "double"
+
+
+def test_first_solve_of_a_step_leaves_the_refactorisation_to_the_next():
+    """A step's first solve beyond the limit keeps the factorisation when the step's next
+    solve is within it (the matrix at a step's start is unlike the step's others); when the
+    step ends after that first solve, the next step's first solve refactors; any other solve
+    beyond the limit refactors at the next solve, as before."""
+    from pilegroup.solver.linsolve import KSPSolver
+
+    n = 400
+    A = _shifted_laplacian(n, n)
+    ls = KSPSolver(MPI.COMM_SELF, A, "reuse_policy_", "direct_reuse", None, lambda p: None)
+    b, x = A.createVecLeft(), A.createVecLeft()
+    b.setArray(np.sin(np.arange(n) + 1.0))
+    base = np.full(n, 2.5)
+    far = base + 8.0 * np.random.default_rng(1).random(n)  # 37 iterations on base's LU
+
+    def solve(diagonal, new_step=False):
+        for i in range(n):
+            A.setValue(i, i, diagonal[i])
+        A.assemble()
+        ls.set_operators(A, None)
+        if new_step:
+            ls.new_step()
+        return ls.solve(b, x, False), ls.refactorisations
+
+    fresh, _ = solve(base, new_step=True)
+    assert ls.refactorisations == 1
+    limit = ls.spec.reuse_factor_its
+    its, factors = solve(far, new_step=True)  # a step's first solve, beyond the limit
+    assert its > fresh + limit and factors == 1
+    its, factors = solve(base)  # the step's next: within, so the factorisation stays
+    assert its <= fresh + limit and factors == 1
+    solve(far, new_step=True)  # beyond the limit, and the step ends there
+    _, factors = solve(far, new_step=True)  # so the next step's first solve refactors
+    assert factors == 2
+    solve(base, new_step=True)  # on far's LU: beyond the limit
+    its, factors = solve(far)  # within the step: decided as before, no refactorisation...
+    assert factors == 2
+    solve(base)  # ...but a solve beyond the limit that is not a step's first refactors next
+    _, factors = solve(base)
+    assert factors == 3
+    ls.close()
