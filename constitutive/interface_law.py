@@ -4,12 +4,13 @@ Zero-thickness Goodman interface with
 
 * a **normal** penalty spring in compression and no tension: ``sigma_n = k_normal * min(g, 0)``
   where ``g`` is the normal opening measured from the zero-traction position (state ``"gap"``).
-  An opening point's shear traction fades out: ``|tau| = t (1 - k_normal g / max(t, F))``
-  (``t`` what its slip gives, ``F`` = :data:`SHEAR_FADE_KPA`), zero from ``g = max(t, F) /
-  k_normal``, so that the traction is continuous through the opening (an interface with
-  cohesion carries its full strength at zero normal stress; dropping it at once made Newton
-  switch points between open and closed from one iteration to the next); once it is zero the
-  point is detached: all three tractions are exactly zero and ``"detached" = 1``. With a
+  An opening point's shear traction fades out: ``|tau| = t (1 - k_f g / max(t, F))``
+  (``t`` what its slip gives, ``F`` = :data:`SHEAR_FADE_KPA`, ``k_f`` = ``fade_stiffness``,
+  ``k_normal`` unless given), zero from ``g = max(t, F) / k_f``, so that the traction is
+  continuous through the opening (an interface with cohesion carries its full strength at zero
+  normal stress; dropping it at once made Newton switch points between open and closed from one
+  iteration to the next); once it is zero the point is detached: all three tractions are
+  exactly zero and ``"detached" = 1``. With a
   bearing limit ``q_b`` (``bearing``, for pile bases) the compression is elastic–perfectly
   plastic: ``sigma_n >= -q_b``, the corner rounded over ``(1 -+ w) q_b`` of the penalty's stress
   (:func:`bearing_curve`, ``w`` = :data:`BEARING_ROUNDING`); a closure beyond the plateau's start
@@ -70,7 +71,7 @@ __all__ = ["PileSoilInterface", "delta_eq17", "dp_outer_cone"]
 _TINY = 1e-300
 
 #: The stress scale of the shear's fade at an opening, kPa: the shear traction ``t`` of an
-#: opening point falls to zero over the opening ``max(t, SHEAR_FADE_KPA) / k_normal``.
+#: opening point falls to zero over the opening ``max(t, SHEAR_FADE_KPA) / fade_stiffness``.
 SHEAR_FADE_KPA = 10.0
 
 #: Half-width of the rounded corner of the bearing limit, a fraction of ``q_b``.
@@ -147,6 +148,10 @@ class PileSoilInterface(DruckerPragerCone):
             shear springs and the normal penalty only; no yield surface, no creep).
         bearing: bearing limit ``q_b`` of the normal compression, kPa (> 0; ``None``: none):
             ``sigma_n >= -q_b``, the rest of a closure being permanent penetration.
+        fade_stiffness: ``k_f`` of the shear's fade at an opening, kPa/m (> 0; ``None``:
+            ``k_normal``). The fade's slope, up to ``k_f`` kPa of shear per metre of opening,
+            couples the shear to the normal jump in the tangent; a stiffer penalty must not
+            steepen it, or Newton chatters between open and closed (docs/solver.md, "Newton").
 
     State (arrays ``(n, k)``): ``traction`` (3, kPa), ``slip_e`` (2, elastic slip, m),
     ``slip_vp`` (2, viscoplastic slip, m), ``gap`` (1, normal opening from the zero-traction
@@ -171,6 +176,7 @@ class PileSoilInterface(DruckerPragerCone):
     p_floor: float = 1.0
     viscous: bool = True
     bearing: float | None = None
+    fade_stiffness: float | None = None
 
     def __post_init__(self) -> None:
         err = ConstitutiveError
@@ -194,12 +200,19 @@ class PileSoilInterface(DruckerPragerCone):
         require_one_of("integrator", self.integrator, ("implicit", "explicit"), error=err)
         if self.bearing is not None:
             require_positive("bearing", self.bearing, "kPa", error=err)
+        if self.fade_stiffness is not None:
+            require_positive("fade_stiffness", self.fade_stiffness, "kPa/m", error=err)
 
     # ------------------------------------------------------------------ derived parameters
     @cached_property
     def delta(self) -> float:
         """Interface friction angle, degrees (given, or Eq. 17)."""
         return float(self.delta_deg) if self.delta_deg is not None else delta_eq17(self.phi_deg)
+
+    @cached_property
+    def k_fade(self) -> float:
+        """Stiffness of the shear's fade at an opening, kPa/m (``fade_stiffness`` or k_normal)."""
+        return self.k_normal if self.fade_stiffness is None else float(self.fade_stiffness)
 
     @cached_property
     def F0(self) -> float:
@@ -426,13 +439,13 @@ class PileSoilInterface(DruckerPragerCone):
         t_r = a / den**2
         t_p = r * (self.n * a + nc.b * r) / (p * den**2)
         dt_dn = t_r * sh.dr_dn + t_p * nc.p_n
-        # an opening point's shear fades out (module docstring): t (1 - k_n g / max(t, F))
+        # an opening point's shear fades out (module docstring): t (1 - k_f g / max(t, F))
         m = np.maximum(t, SHEAR_FADE_KPA)
-        kg = self.k_normal * np.maximum(nc.gap, 0.0)
+        kg = self.k_fade * np.maximum(nc.gap, 0.0)
         t_eff = np.maximum(t - kg * t / m, 0.0)
         held = contact | (t_eff > 0.0)
         d_t = np.where(t < SHEAR_FADE_KPA, 1.0 - kg / m, 1.0)  # d t_eff / d t
-        d_g = np.where(contact, 0.0, -self.k_normal * t / m)  # d t_eff / d opening
+        d_g = np.where(contact, 0.0, -self.k_fade * t / m)  # d t_eff / d opening
         c_perp = np.where(pos, t_eff / np.where(pos, sh.r_tr, 1.0), 1.0 / a)
         c_par = np.where(pos, d_t * t_r * sh.dr_drtr, 1.0 / a)
         c_perp = np.where(held, c_perp, 0.0)

@@ -90,6 +90,15 @@ GEOSTATIC_TOL_M = 1e-4
 #: points (docs/model.md, "Capacity").
 CAPACITY_STEPS = 50
 
+#: The shear's fade at an opening (``PileSoilInterface.fade_stiffness``) follows the normal
+#: penalty ``normal_stiffness_factor * E / h`` up to ``FADE_FACTOR * E / FADE_LENGTH_M``, the
+#: default penalty at h = 1 m, at which the fade's ``SHEAR_FADE_KPA`` was set; a stiffer penalty
+#: (a larger factor, a finer mesh) keeps that fade. Following the penalty, the x10 penalty's fade
+#: was as steep as ``F`` = 1 kPa at the default and Pier 667 chattered (accepted by the alternate
+#: tolerance after 5 Newton iterations at every step, docs/solver.md, "Newton").
+FADE_FACTOR = 100.0
+FADE_LENGTH_M = 1.0
+
 #: Width (m) of the soil around the pile–soil interface that ``fieldsplit_pier`` solves exactly
 #: with the structure (:func:`band_layers`).
 BAND_WIDTH_M = 2.0
@@ -253,8 +262,10 @@ def interface_law(sc: Scenario, j: int, mesh_size: float, base: bool = False
     """The pile-soil interface law of soil layer ``j`` (Table 1 parameters of that layer).
 
     ``k_normal = normal_stiffness_factor * E_layer / h`` with ``h`` the element size at the
-    pile surfaces; ``interface.mode = "elastic"`` drops the viscoplastic slip. ``base``: the law
-    of the pile bases in the layer, with the layer's ``base_bearing_kPa`` as bearing limit.
+    pile surfaces, the shear's fade at an opening at most ``FADE_FACTOR * E_layer /
+    FADE_LENGTH_M``;
+    ``interface.mode = "elastic"`` drops the viscoplastic slip. ``base``: the law of the pile
+    bases in the layer, with the layer's ``base_bearing_kPa`` as bearing limit.
     """
     lay = sc.layers[j]
     ip = lay.interface
@@ -266,7 +277,9 @@ def interface_law(sc: Scenario, j: int, mesh_size: float, base: bool = False
         eta=1.0 if ip.eta is None else ip.eta,  # an elastic interface has no viscosity
         k_normal=opt.normal_stiffness_factor * lay.E / mesh_size, delta_deg=ip.delta_deg,
         N=opt.N, variant=opt.variant, integrator=opt.integrator,
-        viscous=opt.mode == "viscoplastic", bearing=ip.base_bearing_kPa if base else None)
+        viscous=opt.mode == "viscoplastic", bearing=ip.base_bearing_kPa if base else None,
+        fade_stiffness=min(opt.normal_stiffness_factor / mesh_size,
+                           FADE_FACTOR / FADE_LENGTH_M) * lay.E)
 
 
 def interface_coupling(sc: Scenario, mesh_size: float) -> InterfaceCoupling | None:

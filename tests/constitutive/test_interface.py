@@ -491,34 +491,38 @@ def test_tangent_fd_at_bearing_limit(where, plastic):
 
 @pytest.mark.parametrize("integrator", ["implicit", "explicit"])
 @pytest.mark.parametrize("large", [False, True])
-def test_tangent_fd_at_an_opening(integrator, large):
+@pytest.mark.parametrize("fade", [None, 0.1])
+def test_tangent_fd_at_an_opening(integrator, large, fade):
     """Consistent tangent against central differences at points opened past zero traction.
 
     States as in test_tangent_fd (shear above yield, and a second set with the shear scaled up
-    past SHEAR_FADE_KPA); the step opens each point by 0.1-0.9 of ``max(t_0, F) / k_normal``
+    past SHEAR_FADE_KPA); the step opens each point by 0.1-0.9 of ``max(t_0, F) / k_f``
     past its zero-traction position (``t_0``: the shear the step's slip gives at zero normal
-    traction), so sigma_n = 0 and the shear fades; 1e-6 relative.
+    traction; ``k_f`` the fade's stiffness, k_normal or ``fade`` times it), so sigma_n = 0 and
+    the shear fades; 1e-6 relative.
     """
     rng = np.random.default_rng(11)
-    law = law2(integrator=integrator, R_f=0.0, viscous=False) if large \
-        else law2(integrator=integrator)
+    over = {} if fade is None else {"fade_stiffness": fade * law2().k_normal}
+    law = law2(integrator=integrator, R_f=0.0, viscous=False, **over) if large \
+        else law2(integrator=integrator, **over)
     n = 30
     st, inc = random_states(law2(integrator=integrator), rng, n, plastic=True)
     if large:  # linear springs and slips large enough for a shear above SHEAR_FADE_KPA
         st = dict(st)
         st["slip_e"] = st["slip_e"] * 50.0
-    kn = law.k_normal
+    kf = law.k_fade
+    assert kf == law.k_normal * (1.0 if fade is None else fade)
     inc[:, 0] = -st["gap"][:, 0]  # at zero normal traction: the shear the slip gives there
     tr0, _, _ = law.update(inc, st, 20.0)
     m = np.maximum(np.hypot(tr0[:, 1], tr0[:, 2]), SHEAR_FADE_KPA)
-    inc[:, 0] += rng.uniform(0.1, 0.9, n) * m / kn
+    inc[:, 0] += rng.uniform(0.1, 0.9, n) * m / kf  # fade = 0.1: beyond the penalty's own fade
     tr, new, tang = law.update(inc, st, 20.0)
     assert np.all(tr[:, 0] == 0.0) and np.all(np.hypot(tr[:, 1], tr[:, 2]) > 0.0)
     assert np.all(new["detached"] == 0.0)
     assert np.all(m > SHEAR_FADE_KPA) if large else np.all(m == SHEAR_FADE_KPA)
     fd = np.empty_like(tang)
     for j in range(3):
-        h = 1e-6 * m.min() / kn if j == 0 else 1e-8
+        h = 1e-6 * m.min() / kf if j == 0 else 1e-8
         e = np.zeros(3)
         e[j] = h
         tp, _, _ = law.update(inc + e, st, 20.0)
@@ -527,3 +531,61 @@ def test_tangent_fd_at_an_opening(integrator, large):
     A, B = tang[:, 1:, :], fd[:, 1:, :]
     err = np.linalg.norm(A - B, axis=(1, 2)) / np.linalg.norm(A, axis=(1, 2))
     assert err.max() <= 1e-6
+
+
+def _newton_at_one_point(law, K, f, traction0, W, dt, max_it=30):
+    """Newton on one interface point held by a soil spring: ``K x + W t(x) = f``.
+
+    ``x``: the jump (m; the pile does not move), ``K`` (kN/m) the soil's spring, ``W`` (m^2)
+    the point's area, ``f`` (kN) the load. Returns the residual norms (kN) and the last state.
+    """
+    st = law.initial_state(1, traction0)
+    x = np.zeros(3)
+    res = []
+    for _ in range(max_it):
+        t, trial, tang = law.update(x[None], st, dt)
+        r = K @ x + W * t[0] - f
+        res.append(float(np.linalg.norm(r)))
+        if res[-1] < 1e-12:
+            break
+        x = x - np.linalg.solve(K + W * tang[0], r)
+    return res, trial
+
+
+def test_newton_through_an_opening_under_the_x10_penalty():
+    """A point pulled open under 10 x the default penalty: Newton converges, the fade held.
+
+    Pier 667's top-layer law as the run builds it (``interface_law``, h = 3 m,
+    ``normal_stiffness_factor`` 1000) on a soil spring of 200 kN/m with a normal-shear
+    coupling of -20 kN/m, area 0.05 m^2, in situ sigma_n = -0.3 kPa and shear 0.5 kPa; the step
+    (0.8 day) adds 0.02 kN outward and 0.05 kN of shear, and the point detaches. The shear's fade
+    stays the default penalty's at h = 1 m (``FADE_FACTOR * E / FADE_LENGTH_M``): Newton takes
+    at most 5 iterations. With the fade following the penalty
+    (``fade_stiffness = None``) its slope, 3.3 times steeper, makes Newton cycle: open in the
+    fade by 0.19 kPa / k_normal, closed by 56, closed by 0.01, open again (residual 0.0098,
+    2.8, 0.11 kN, ...), as Pier 667's surface points did at every step (docs/solver.md,
+    "Newton"). The default penalty keeps its fade.
+    """
+    import dataclasses
+    import tomllib
+
+    from pilegroup.model import bundled_text, scenario_from_dict
+    from pilegroup.studies.run.pipeline import FADE_FACTOR, FADE_LENGTH_M, interface_law
+
+    d = tomllib.loads(bundled_text("pier667"))
+    default = interface_law(scenario_from_dict(d), 0, 3.0)
+    d["interface"]["normal_stiffness_factor"] = 1000.0
+    law = interface_law(scenario_from_dict(d), 0, 3.0)
+    K = 200.0 * np.array([[1.0, -0.1, 0.0], [-0.1, 1.0, 0.0], [0.0, 0.0, 1.0]])
+    W, t0 = 0.05, np.array([-0.3, 0.5, 0.0])
+    f = W * t0 + np.array([0.02, 0.05, 0.0])
+    res, st = _newton_at_one_point(law, K, f, t0, W, 0.8)
+    assert res[-1] < 1e-12 and len(res) <= 5, res
+    assert st["detached"][0, 0] == 1.0
+    assert law.k_normal == pytest.approx(10.0 * default.k_normal, rel=1e-14)
+    E = scenario_from_dict(d).layers[0].E
+    assert law.k_fade == pytest.approx(FADE_FACTOR * E / FADE_LENGTH_M, rel=1e-14)
+    assert default.k_fade == pytest.approx(default.k_normal, rel=1e-14)  # below the cap
+    res, _ = _newton_at_one_point(dataclasses.replace(law, fade_stiffness=None), K, f, t0, W,
+                                  0.8)
+    assert res[-1] > 1e-3 and np.allclose(res[-3:], res[-6:-3], rtol=1e-3)  # a 3-cycle

@@ -248,9 +248,10 @@ CATALOGUE: dict[str, tuple[str, ...]] = {
     "constitutive/base.py::as_points": (G,),
     "constitutive/base.py::broadcast_state": (G,),
     # K, n, R_f, c, phi, eta, k_normal, delta, delta from phi = 0, N, r_w, P_a, p_floor,
-    # variant, integrator, bearing
+    # variant, integrator, bearing, fade_stiffness
     "constitutive/interface_law.py::PileSoilInterface.__post_init__": (
-        G, G, G, G, G, G, G, "interface-delta-zero", "interface-delta-from-phi-0", G, G, G, G),
+        G, G, G, G, G, G, G, "interface-delta-zero", "interface-delta-from-phi-0", G, G, G, G,
+        G),
     "constitutive/interface_law.py::PileSoilInterface.initial_state": (G,) * 3,
     "constitutive/interface_law.py::PileSoilInterface.update": (G,),
     "constitutive/interface_law.py::PileSoilInterface._return": (R,),
