@@ -486,7 +486,9 @@ class PileSoilInterface(DruckerPragerCone):
             lo = np.where(R < 0.0, r, lo)
             hi = np.where(R > 0.0, r, hi)
             rn = r - R / Rr
-            out = (rn < lo) | (rn > hi)
+            # a bracket's end is never the root (R(0) < 0 < R(r_tr)): a step landing on it
+            # bisects, or Newton alternates between r_tr and one value (long steps, dt >= 40)
+            out = (rn <= lo) | (rn >= hi)
             rn = np.where(out, 0.5 * (lo + hi), rn)
             done = np.abs(rn - r) <= 1e-15 * r_tr
             r = rn
