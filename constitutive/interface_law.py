@@ -4,19 +4,15 @@ Zero-thickness Goodman interface with
 
 * a **normal** penalty spring in compression and no tension: ``sigma_n = k_normal * min(g, 0)``
   where ``g`` is the normal opening measured from the zero-traction position (state ``"gap"``).
-  An opening point's shear traction fades out: ``|tau| = t (1 - k_f g / max(t, F))``
-  (``t`` what its slip gives, ``F`` = :data:`SHEAR_FADE_KPA`, ``k_f`` = ``fade_stiffness``,
-  ``k_normal`` unless given), zero from ``g = max(t, F) / k_f``, so that the traction is
-  continuous through the opening (an interface with cohesion carries its full strength at zero
-  normal stress; dropping it at once made Newton switch points between open and closed from one
-  iteration to the next); once it is zero the point is detached: all three tractions are
-  exactly zero and ``"detached" = 1``. With a
-  bearing limit ``q_b`` (``bearing``, for pile bases) the compression is elastic–perfectly
-  plastic: ``sigma_n >= -q_b``, the corner rounded over ``(1 -+ w) q_b`` of the penalty's stress
-  (:func:`bearing_curve`, ``w`` = :data:`BEARING_ROUNDING`); a closure beyond the plateau's start
-  ``-(1 + w) q_b / k_normal`` is permanent penetration, which moves the zero-traction position
-  (``g`` stays there), and an opening from there unloads along the curve (a base spring with the
-  ultimate resistance ``q_b``, as a Q–z curve's plateau);
+  An opening point's shear fades out, ``|tau| = t (1 - k_f g / max(t, F))`` (``t`` what its
+  slip gives, ``F`` = :data:`SHEAR_FADE_KPA`, ``k_f`` = ``fade_stiffness``), zero from ``g =
+  max(t, F) / k_f``: the traction stays continuous (with cohesion the full strength acts at zero
+  normal stress; a sudden drop made Newton switch points between open and closed); then the
+  point is detached: all three tractions exactly zero, ``"detached" = 1``. With a bearing limit
+  ``q_b`` (``bearing``, pile bases) ``sigma_n >= -q_b``, the corner rounded over ``(1 -+ w)
+  q_b`` (:func:`bearing_curve`, ``w`` = :data:`BEARING_ROUNDING`); a closure beyond ``-(1 + w)
+  q_b / k_normal`` is permanent penetration (the zero-traction position moves), and an opening
+  from there unloads along the curve (a Q–z curve's plateau);
 * an **elastic shear** law after Clough & Duncan (Eqs. 5–8): with ``p = max(-sigma_n, p_floor)``
   the compressive normal stress magnitude, ``a = 1 / (K r_w (p/P_a)^n)`` and
   ``b = R_f / (p tan(delta))``, the shear traction is ``tau = gamma_e / (a + b |gamma_e|)``
@@ -70,8 +66,7 @@ __all__ = ["PileSoilInterface", "delta_eq17", "dp_outer_cone"]
 
 _TINY = 1e-300
 
-#: The stress scale of the shear's fade at an opening, kPa: the shear traction ``t`` of an
-#: opening point falls to zero over the opening ``max(t, SHEAR_FADE_KPA) / fade_stiffness``.
+#: The stress scale of the shear's fade at an opening, kPa (module docstring).
 SHEAR_FADE_KPA = 10.0
 
 #: Half-width of the rounded corner of the bearing limit, a fraction of ``q_b``.
@@ -149,9 +144,7 @@ class PileSoilInterface(DruckerPragerCone):
         bearing: bearing limit ``q_b`` of the normal compression, kPa (> 0; ``None``: none):
             ``sigma_n >= -q_b``, the rest of a closure being permanent penetration.
         fade_stiffness: ``k_f`` of the shear's fade at an opening, kPa/m (> 0; ``None``:
-            ``k_normal``). The fade's slope, up to ``k_f`` kPa of shear per metre of opening,
-            couples the shear to the normal jump in the tangent; a stiffer penalty must not
-            steepen it, or Newton chatters between open and closed (docs/solver.md, "Newton").
+            ``k_normal``); too steep, it makes Newton cycle (docs/solver.md, "Newton").
 
     State (arrays ``(n, k)``): ``traction`` (3, kPa), ``slip_e`` (2, elastic slip, m),
     ``slip_vp`` (2, viscoplastic slip, m), ``gap`` (1, normal opening from the zero-traction
@@ -486,8 +479,7 @@ class PileSoilInterface(DruckerPragerCone):
             lo = np.where(R < 0.0, r, lo)
             hi = np.where(R > 0.0, r, hi)
             rn = r - R / Rr
-            # a bracket's end is never the root (R(0) < 0 < R(r_tr)): a step landing on it
-            # bisects, or Newton alternates between r_tr and one value (long steps, dt >= 40)
+            # a bracket's end is never the root: a step onto it bisects (else it alternates)
             out = (rn <= lo) | (rn >= hi)
             rn = np.where(out, 0.5 * (lo + hi), rn)
             done = np.abs(rn - r) <= 1e-15 * r_tr

@@ -1,43 +1,24 @@
 """Linear-solver option sets as data, and the KSP built from them.
 
-Presets:
+Presets (docs/solver.md, "Linear solvers"; measured in docs/benchmarks.md):
 
 * ``direct``: MUMPS LU (robust, for small and medium problems; the default).
 * ``direct_reuse``: FGMRES on the current Jacobian preconditioned by a kept block low-rank
   MUMPS LU in single precision; ``direct_reuse_double``: the same LU in double precision (the
   fallback of ``direct_reuse``); ``direct_reuse_ooc`` and its fallback
   ``direct_reuse_ooc_double``: the same two with the factors out of core.
-* ``fieldsplit_gamg``: FGMRES preconditioned by a block Gauss–Seidel (``multiplicative``
-  field split) of the u–p system. The displacement block is solved by one GAMG V-cycle with the
-  rigid-body near-nullspace; the pressure block of the preconditioning matrix carries the
-  fixed-stress term ``(alpha^2/K_dr) M`` (Kim, Tchelepi & Juanes 2011; Mikelić & Wheeler 2013;
-  as a preconditioner: White, Castelletto & Tchelepi 2016), so the split is the fixed-stress
-  iteration used as a preconditioner. The p block (mass + dt * diffusion + fixed-stress mass)
-  gets one SOR sweep: GAMG there failed (``KSP_DIVERGED_PC_FAILED``) when every pressure dof
-  is fixed (drained analysis: the block is the identity), and SOR needed as few or fewer
-  FGMRES iterations than GAMG on the verification cases (Terzaghi 16.6 vs 18.2, Mandel 18.3 vs
-  17.2 per Newton step). For diffusion-dominated steps on large meshes override with
-  ``fieldsplit_p_pc_type = "gamg"``.
-* ``fieldsplit_pier``: FGMRES preconditioned by a three-way block Gauss–Seidel for piles joined
-  to the soil by interface springs, in the order pressure, structure, soil: the pressure block
-  of the fixed-stress matrix by MUMPS LU (the fixed-stress split: pressure first; the order
-  mechanics first does not converge even with exact blocks), then the structure (piles and cap)
-  together with the soil displacement at the interface nodes and a band of cell layers of soil
-  around them by MUMPS LU (the stiff springs and the 10^4 stiffness contrast stay inside one block;
-  both LUs in single precision), then the soil other than the interface nodes by one GAMG V-cycle
-  (rigid-body near-nullspace, unsmoothed aggregation, four Chebyshev steps each of two SOR sweeps:
-  Chebyshev/Jacobi needs 3.5 times the iterations, one sweep per step 1.3 to 1.7 times). The
-  two displacement blocks overlap on the band of soil, which makes the split a multiplicative
-  Schwarz method there. The band's width in metres, not its layer count, sets the iterations,
-  so a problem built for a mesh size takes as many layers as cover about 2 m
-  (``SolverOptions.band_layers``; the preset's own two layers fit h = 1 m). Unsmoothed
-  aggregation cuts the AMG set-up from 12.6 s to 0.7 s. Measured on the Pier 667 system in
-  docs/benchmarks.md ("Iterative preconditioners on the pier Jacobian").
-
-* ``fieldsplit_kept``: ``fieldsplit_pier`` whose structure block keeps its LU factorisation
-  across new Jacobians (``Preset.keep_blocks``) until a solve needs more than 60 iterations;
-  the pressure and soil blocks are set up with every matrix. Full Pier 667 at h = 1 m: 2
-  set-ups of that block instead of 29, the run 17 % shorter (docs/benchmarks.md).
+* ``fieldsplit_gamg``: FGMRES preconditioned by a block Gauss–Seidel of the u–p system: one
+  GAMG V-cycle with the rigid-body near-nullspace on u, one SOR sweep on the pressure block of
+  the fixed-stress matrix ``(alpha^2/K_dr) M`` (Kim, Tchelepi & Juanes 2011; White,
+  Castelletto & Tchelepi 2016); GAMG on p failed when every pressure dof is fixed.
+* ``fieldsplit_pier``: FGMRES preconditioned by a three-way block Gauss–Seidel in the order
+  pressure (MUMPS LU of the fixed-stress block), structure (piles and cap with the soil at the
+  interface nodes and a band of about 2 m of soil, ``SolverOptions.band_layers``, by MUMPS LU:
+  the stiff springs and the 10^4 stiffness contrast stay in one block), other soil (one GAMG
+  V-cycle, unsmoothed aggregation, Chebyshev(4) of two SOR sweeps); both LUs in single
+  precision; the displacement blocks overlap on the band (multiplicative Schwarz there).
+* ``fieldsplit_kept``: ``fieldsplit_pier`` whose structure block keeps its LU across new
+  Jacobians (``Preset.keep_blocks``) until a solve needs more than 60 iterations.
 
 Every problem has its own options prefix; after each solve the converged reason is checked and
 a negative reason raises :class:`LinearSolveError` (a :class:`ConvergenceError`).
@@ -84,8 +65,7 @@ class Preset:
             beyond those of the first solve with the factorisation (a fresh block low-rank
             factorisation is itself inexact: on the full pier at h = 1 m its first solves need
             about 28 iterations, and a fixed limit of 20 refactored at every Newton matrix);
-            after the first solve of a step, the step's next solve decides
-            (:meth:`KSPSolver.new_step`).
+            for a step's first solve, the step's next decides (:meth:`KSPSolver.new_step`).
         fallback: the preset that takes over (with one warning line) when a solve with this
             one fails; ``None``: the failure is the step's.
         keep_blocks: field-split blocks whose preconditioner (e.g. an LU factorisation) is
@@ -310,12 +290,11 @@ class KSPSolver:
     GMRES across Newton iterations and steps (the matrix itself is always the current Jacobian,
     so Newton stays exact); a solve that needs more than ``reuse_factor_its`` iterations
     beyond the factorisation's first solve, or fails, triggers a new factorisation (and a
-    re-solve when it failed); for the first solve of a step (:meth:`new_step`) the step's
-    next solve decides. A factorisation made
-    under another set of constraints (undrained steps release the drainage conditions) is not
-    tried at all: it is refactored at once. When a Krylov solve of a preset that has a
-    ``fallback`` fails (or a step cannot be completed with it even at the stepper's minimum
-    step), :meth:`fall_back` replaces the preset for the rest of the run (one warning line;
+    re-solve when it failed); for a step's first solve (:meth:`new_step`) the step's next
+    decides. A factorisation made under other constraints (undrained steps release the
+    drainage conditions) is refactored at once. When a Krylov solve of a preset that has a
+    ``fallback`` fails (or a step fails with it at the stepper's minimum step),
+    :meth:`fall_back` replaces the preset for the rest of the run (one warning line;
     :attr:`fallbacks` records it).
 
     Args:
@@ -505,8 +484,7 @@ class KSPSolver:
                                                or self.spec.options.get("pc_type") == "lu"):
             self.refactorisations += 1  # LU (of the blocks) and AMG set up once per matrix
         self._new_matrix = False
-        log.debug("linear solve: %d iterations, %s factorisation, %.3f s", its,
-                  "kept" if self._reusing else "new", time.perf_counter() - t0)
+        log.debug("linear solve: %d iterations, %.3f s", its, time.perf_counter() - t0)
         if limit:
             kept = self._reusing
             if not kept:
@@ -514,11 +492,9 @@ class KSPSolver:
                 self._factor_undrained = undrained
                 self._fresh_its = its
             within = its <= self._fresh_its + limit
-            # A step's first solve beyond the limit leaves the decision to the next solve: the
-            # matrix at the start of a step is unlike the step's next ones, which the kept
-            # factorisation may still serve (group2x3_lateral, days 42.8-200: 28-30
-            # iterations for the first solve of each step, then 8-9 and 4-5 on the same
-            # factorisation). If the step ends there, the next step's first solve refactors.
+            # a step's first solve beyond the limit leaves the decision to the next: a step's
+            # first matrix is unlike its next ones, which the kept LU may still serve; if the
+            # step ends there, the next step's first solve refactors (docs/solver.md)
             self._doubtful = first and kept and not within
             self._set_reuse(within or self._doubtful)
         return its

@@ -1,13 +1,11 @@
 """A scenario as a coupled Biot problem, and the one way a scenario's stages are run.
 
-The one place that maps :class:`~pilegroup.model.Scenario` onto the solver's inputs. The piles
-and cap are elastic solids, either tied to the soil (one displacement field; ``interface.mode =
-"tied"``, which also bonds the cap bottom to the ground surface) or on their own displacement
-field joined to the soil by the interface law of each layer (``elastic``/``viscoplastic``; the
-cap is then not in contact with the soil).
+The one place that maps :class:`~pilegroup.model.Scenario` onto the solver's inputs. Piles and
+cap are elastic solids, tied to the soil (``interface.mode = "tied"``: one displacement field,
+the cap bottom bonded to the ground) or on their own field joined to the soil by each layer's
+interface law (``elastic``/``viscoplastic``; the cap then not in contact with the soil).
 Boundaries (docs/model.md): bottom fixed, sides roller, ground surface (or the water table
-below it) drained (p = 0); every other boundary impermeable. The cap load is a uniform
-pressure on the cap top (or on the pile heads when there is no cap).
+below it) drained; the rest impermeable. The cap load: a pressure on the cap top (pile heads).
 """
 
 from __future__ import annotations
@@ -78,26 +76,19 @@ from pilegroup.studies.run.stiffness import cap_stiffness, write_cap_stiffness
 
 log = logging.getLogger(__name__)
 
-#: Largest displacement (m) the geostatic equilibrium check accepts. With the interface, the
-#: nodal (lumped) in-situ tractions balance the Gauss-integrated soil stress only to a small
-#: residual whose source is not yet pinned down: measured 2.7e-6 m (coarse single-pile test
-#: mesh, at the pile toe) and 1.1e-5 m (pier667 default mesh), against settlements of
-#: centimetres. Tied piles: < 1e-9 m.
+#: Largest displacement (m) the geostatic equilibrium check accepts: with the interface, the
+#: nodal in-situ tractions balance the Gauss-integrated soil stress only to 2.7e-6 m (single
+#: pile) and 1.1e-5 m (pier667), a residual not yet explained; tied piles < 1e-9 m.
 GEOSTATIC_TOL_M = 1e-4
 
-#: A capacity stage's steps are at most its duration over this many: the load–settlement
-#: curve, and with it the tangent stiffness of the plunging criterion, gets at least as many
-#: points (docs/model.md, "Capacity").
+#: A capacity stage's steps are at most its duration over this many: the load–settlement curve
+#: (and the plunging criterion's tangent) gets as many points (docs/model.md, "Capacity").
 CAPACITY_STEPS = 50
 
-#: The shear's fade at an opening (``PileSoilInterface.fade_stiffness``) follows the normal
-#: penalty ``normal_stiffness_factor * E / h`` up to ``FADE_FACTOR * E / FADE_LENGTH_M``, the
-#: default penalty at h = 1 m, at which the fade's ``SHEAR_FADE_KPA`` was set; a stiffer penalty
-#: (a larger factor, a finer mesh) keeps that fade. Following the penalty, the x10 penalty's fade
-#: was as steep as ``F`` = 1 kPa at the default and Pier 667 chattered (accepted by the alternate
-#: tolerance after 5 Newton iterations at every step, docs/solver.md, "Newton").
-FADE_FACTOR = 100.0
-FADE_LENGTH_M = 1.0
+#: The shear's fade at an opening (``PileSoilInterface.fade_stiffness``) follows the penalty up
+#: to ``FADE_FACTOR * E / FADE_LENGTH_M``, the default penalty at h = 1 m: steeper, Newton
+#: cycles (docs/solver.md, "Newton").
+FADE_FACTOR, FADE_LENGTH_M = 100.0, 1.0
 
 #: Width (m) of the soil around the pile–soil interface that ``fieldsplit_pier`` solves exactly
 #: with the structure (:func:`band_layers`).
@@ -261,11 +252,9 @@ def interface_law(sc: Scenario, j: int, mesh_size: float, base: bool = False
                   ) -> PileSoilInterface | None:
     """The pile-soil interface law of soil layer ``j`` (Table 1 parameters of that layer).
 
-    ``k_normal = normal_stiffness_factor * E_layer / h`` with ``h`` the element size at the
-    pile surfaces, the shear's fade at an opening at most ``FADE_FACTOR * E_layer /
-    FADE_LENGTH_M``;
-    ``interface.mode = "elastic"`` drops the viscoplastic slip. ``base``: the law of the pile
-    bases in the layer, with the layer's ``base_bearing_kPa`` as bearing limit.
+    ``k_normal = normal_stiffness_factor * E_layer / h``, ``h`` the element size at the piles
+    (the fade at most :data:`FADE_FACTOR`); ``mode = "elastic"``: no viscoplastic slip.
+    ``base``: the law of the pile bases, with the layer's ``base_bearing_kPa`` as limit.
     """
     lay = sc.layers[j]
     ip = lay.interface
@@ -283,10 +272,7 @@ def interface_law(sc: Scenario, j: int, mesh_size: float, base: bool = False
 
 
 def interface_coupling(sc: Scenario, mesh_size: float) -> InterfaceCoupling | None:
-    """Separate pile/soil fields joined by the interface law, or ``None`` (``tied``).
-
-    ``mesh_size``: the element size h (m) at the pile surfaces (the normal penalty's scale).
-    """
+    """Pile/soil fields joined by the interface law (``mesh_size``: h at the piles), or None."""
     if sc.interface.mode == "tied":
         return None
     layers = range(len(sc.layers))
