@@ -63,8 +63,9 @@ Q2_LENGTHS = ("dz_surface_m", "dz_toe_m", "dz_max_m", "dz_max_deep_m", "dz_cap_m
 #: Growth ratios in plan and in depth.
 GROWTH, DZ_GROWTH = 1.6, 1.4
 #: Coarsening steps tried in order until the estimate fits: (factor on the automatic lengths,
-#: edges around a pile, least element layers across a layer). The first is the nominal mesh.
-STEPS = ((1.0, N_CIRC, 2), (1.25, 24, 2), (1.5, 20, 2), (2.0, 16, 2), (2.0, 16, 1),
+#: at most this many edges around a pile and element layers across a layer). The first is the
+#: nominal mesh itself (``None``: the nominal edges and layers, refined by a scale below 1).
+STEPS = ((1.0, None, None), (1.25, 24, 2), (1.5, 20, 2), (2.0, 16, 2), (2.0, 16, 1),
          (2.5, 12, 1), (3.0, 12, 1), (4.0, 12, 1))
 #: Largest automatic sizes (m): the validator's bounds (size_m also <= 5 x the thinnest pile).
 SIZE_MAX, FAR_MAX, DZ_MAX = 10.0, 200.0, 100.0
@@ -145,8 +146,10 @@ def resolve_mesh(sc: EstimatedScenario, given: Mapping[str, float | int], elemen
     size_max = min(SIZE_MAX, 5.0 * min(sc.piles.diameters))
     step = 0
     for step, (factor, n_circ, divisions) in enumerate(STEPS):  # noqa: B007 - returned
-        sizes = dict(nominal, n_circ_min=min(n_circ, nominal["n_circ_min"]),
-                     min_layer_divisions=min(divisions, nominal["min_layer_divisions"]))
+        sizes = dict(nominal)
+        if n_circ is not None:
+            sizes["n_circ_min"] = min(n_circ, nominal["n_circ_min"])
+            sizes["min_layer_divisions"] = min(divisions, nominal["min_layer_divisions"])
         for k in LENGTHS:
             sizes[k] = min(nominal[k] * factor, DZ_MAX)
         sizes["size_m"] = min(sizes["size_m"], size_max)

@@ -180,6 +180,9 @@ def test_scale_refines_every_automatic_length_and_the_edges_around_a_pile():
     assert m.size_m == pytest.approx(1.5) and m.dz_max_deep_m == pytest.approx(22.5)
     assert m.dz_cap_m == 1.5  # given: not scaled
     assert m.n_circ_min == 20  # 28 / 1.5 to the nearest multiple of 4
+    data["numerics"] = {"mesh": {"scale": 0.5}}  # refining: the edges too, not only lengths
+    m = scenario_from_dict(data).numerics.mesh
+    assert m.size_m == pytest.approx(0.5) and m.n_circ_min == 56
     data["numerics"] = {"mesh": {"scale": 0.1}}
     with pytest.raises(ScenarioError, match="scale"):
         scenario_from_dict(data)
