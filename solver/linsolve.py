@@ -28,7 +28,6 @@ from __future__ import annotations
 
 import dataclasses
 import logging
-import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -474,7 +473,6 @@ class KSPSolver:
         if limit and self._reusing and (self._factor_undrained != undrained
                                         or (first and self._doubtful)):
             self._set_reuse(False)
-        t0 = time.perf_counter()
         self.ksp.solve(rhs, sol)
         if limit and self.ksp.getConvergedReason() < 0 and self._reusing:
             self._set_reuse(False)  # stale factorisation: refactor and solve again
@@ -484,7 +482,8 @@ class KSPSolver:
                                                or self.spec.options.get("pc_type") == "lu"):
             self.refactorisations += 1  # LU (of the blocks) and AMG set up once per matrix
         self._new_matrix = False
-        log.debug("linear solve: %d iterations, %.3f s", its, time.perf_counter() - t0)
+        log.debug("linear solve: %d iterations, %s factorisation", its,
+                  "kept" if self._reusing else "new")
         if limit:
             kept = self._reusing
             if not kept:

@@ -31,6 +31,7 @@ from pilegroup.geometry.adapter import ResolvedGeometry
 from pilegroup.geometry.meshdata import MeshData
 from pilegroup.geometry.symmetry import PLANES
 from pilegroup.model import Scenario, Stage
+from pilegroup.model.analysis import InterfaceOptions
 from pilegroup.model.insitu import own_levels, seepage
 from pilegroup.model.soil_models import k0nc, layer_model
 from pilegroup.solver import (
@@ -88,7 +89,7 @@ CAPACITY_STEPS = 50
 #: The shear's fade at an opening (``PileSoilInterface.fade_stiffness``) follows the penalty up
 #: to ``FADE_FACTOR * E / FADE_LENGTH_M``, the default penalty at h = 1 m: steeper, Newton
 #: cycles (docs/solver.md, "Newton").
-FADE_FACTOR, FADE_LENGTH_M = 100.0, 1.0
+FADE_FACTOR, FADE_LENGTH_M = InterfaceOptions.normal_stiffness_factor, 1.0
 
 #: Width (m) of the soil around the pile–soil interface that ``fieldsplit_pier`` solves exactly
 #: with the structure (:func:`band_layers`).
