@@ -82,7 +82,7 @@ __all__ = [
 ]
 
 #: Bump whenever the builder changes the mesh it makes for a given spec (invalidates caches).
-BUILDER_VERSION = "pier-4"
+BUILDER_VERSION = "pier-5"
 CACHE_ENV = "PILEGROUP_MESH_CACHE"
 
 

@@ -30,7 +30,7 @@ import math
 from collections import Counter
 from collections.abc import Sequence
 
-from pilegroup.geometry.plan import PlanView, cell_grid, pile_cell, radial_edges
+from pilegroup.geometry.plan import PlanView, cell_grid, pile_cell, polygon_radius, radial_edges
 from pilegroup.geometry.spec import GeometrySpec
 from pilegroup.geometry.symmetry import TOL
 
@@ -82,8 +82,8 @@ class _CutPile:
         self.nq = n_circ // 4
         self.cx = 0.0 if cut[0] else p.x
         self.cy = 0.0 if cut[1] else p.y
-        self.r = p.radius
-        self.a = 0.6 * p.radius * _S  # half side of the inner square
+        self.r = polygon_radius(p.radius, n_circ)
+        self.a = 0.6 * self.r * _S  # half side of the inner square
         self.m_in, self.m_out, self.coef = radial_edges(spec, p, [pv.xy(t) for t in g],
                                                         n_circ)
         self.centre = pv.point(self.cx, self.cy)

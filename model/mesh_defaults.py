@@ -3,11 +3,12 @@
 Most scenarios never write ``[numerics]``; what they get is this module's choice, and the
 bundled scenarios use it too (docs/model.md, "The default discretisation").
 
-Element pair (``numerics.element = "auto"``): ``Q2Q1`` (Taylor–Hood) where trilinear hexahedra
-lock (the scenario's ``locking_reason``: horizontal actions bend the piles, ``verify
-lateral-single-pile`` 18-44 % too stiff; a capacity stage drives a plastic soil to isochoric
-flow) and the Q2Q1 model fits :data:`UNKNOWN_BUDGET` at the nominal sizes; else the stabilised
-equal-order pair ``Q1Q1``.
+Element pair (``numerics.element = "auto"``): ``Q2Q1`` (Taylor–Hood, stabilised) wherever the
+Q2Q1 model fits :data:`UNKNOWN_BUDGET` at its automatic sizes; else the stabilised equal-order
+pair ``Q1Q1``. Trilinear hexahedra are too stiff next to piles: they lock where the piles bend
+(the scenario's ``locking_reason``: ``verify lateral-single-pile`` 18-44 % too stiff; a capacity
+stage drives a plastic soil to isochoric flow), and under vertical load alone ``pier667``
+settles 3.1 % less than on Q2Q1 (docs/benchmarks.md, "Vertical actions only").
 
 Mesh sizes (``numerics.mesh``), for the largest pile diameter ``d``, the longest pile ``L``, the
 block's smaller plan side ``W`` and depth ``D`` (the rules reproduce the sizes the Pier 667 mesh
@@ -22,7 +23,9 @@ study validated, docs/results.md):
 * ``dz_cap_m = min(1.5 d, cap thickness)``; ``min_layer_divisions = 2`` (every layer at least
   two elements thick, so thin layers set their own sizes);
 * with ``Q2Q1``: ``size_m = min(2 d, clear gap)``, twice every vertical length (the cap's at
-  most its thickness), ``n_circ_min = 16`` and ``min_layer_divisions = 1`` (:data:`Q2_LENGTH`).
+  most its thickness), ``n_circ_min = 16`` and ``min_layer_divisions = 1`` (:data:`Q2_LENGTH`)
+  where the piles bend; with vertical actions only every length twice that again and 12 edges
+  around a pile (:data:`AXIAL_LENGTH`).
 
 Memory budget: when the estimated unknowns (:func:`estimated_unknowns`) of the part the run
 models (the whole block, or the half or quarter its mirror symmetry allows,
@@ -43,9 +46,8 @@ from dataclasses import replace
 from pilegroup.model.analysis import MeshOptions, Numerics
 from pilegroup.model.mesh_estimate import EstimatedScenario, estimated_unknowns
 
-#: Why the equal-order pair is the default where nothing locks.
-Q1Q1_REASON = ("auto: every action is vertical and the soil stays in its elastic range or "
-               "has no plastic flow to lock")
+#: Why Taylor–Hood is the default where nothing bends.
+AXIAL_REASON = "auto: every action is vertical (Q2Q1 at the axial sizes)"
 
 #: Unknowns a default mesh may have in the part the run models: the full Pier 667 at h = 0.1 m
 #: (623,988 unknowns) ran in 14.6 GB on 2 ranks with the kept LU.
@@ -59,6 +61,11 @@ N_CIRC = 28
 #: measured") Q2Q1 at these sizes is 4.8 % from Randolph's head deflection with 33,065
 #: unknowns, at the trilinear sizes 4.1 % with 134,575.
 Q2_LENGTH, N_CIRC_Q2 = 2.0, 16
+#: With vertical actions only nothing bends: Taylor–Hood's lengths times ``AXIAL_LENGTH`` and
+#: :data:`N_CIRC_AXIAL` edges around a pile. On ``pier667`` (docs/benchmarks.md, "Vertical
+#: actions only") 0.6 % from Q2Q1 at the bending sizes with 98,458 unknowns against 168,993, in
+#: 55 against 95 s; the edges around a pile set the difference (8 edges: 1.7 %).
+AXIAL_LENGTH, N_CIRC_AXIAL = 2.0, 12
 Q2_LENGTHS = ("dz_surface_m", "dz_toe_m", "dz_max_m", "dz_max_deep_m", "dz_cap_m")
 #: Growth ratios in plan and in depth.
 GROWTH, DZ_GROWTH = 1.6, 1.4
@@ -75,13 +82,15 @@ LENGTHS = ("size_m", "far_field_size_m", "dz_surface_m", "dz_toe_m", "dz_max_m",
            "dz_max_deep_m", "dz_cap_m")
 
 
-def nominal_sizes(sc: EstimatedScenario, scale: float = 1.0, element: str = "Q1Q1"
-                  ) -> dict[str, float | int]:
+def nominal_sizes(sc: EstimatedScenario, scale: float = 1.0, element: str = "Q1Q1",
+                  bending: bool = True) -> dict[str, float | int]:
     """The automatic sizes of every ``numerics.mesh`` key before the memory budget (m, -).
 
     ``element``: ``Q2Q1`` takes :data:`Q2_LENGTH` times the lengths next to and along the
     piles, :data:`N_CIRC_Q2` edges around a pile and one element across a thin layer (a
-    quadratic element spans what two trilinear ones do: three nodes across the layer).
+    quadratic element spans what two trilinear ones do: three nodes across the layer); without
+    ``bending`` (vertical actions only) every length :data:`AXIAL_LENGTH` times that again and
+    :data:`N_CIRC_AXIAL` edges around a pile.
     ``scale`` (``numerics.mesh.scale``) multiplies every length and divides the edges around a
     pile (to the nearest multiple of 4, at least 8): a refinement study's one knob.
     """
@@ -93,6 +102,10 @@ def nominal_sizes(sc: EstimatedScenario, scale: float = 1.0, element: str = "Q1Q
             out[k] = out[k] * Q2_LENGTH
         out["size_m"] = min(out["size_m"] * Q2_LENGTH, _clear_gap(sc))
         out["far_field_size_m"] = max(out["far_field_size_m"], out["size_m"])
+        if not bending:
+            n_circ = N_CIRC_AXIAL
+            for k in (*Q2_LENGTHS, "size_m", "far_field_size_m"):
+                out[k] = out[k] * AXIAL_LENGTH
         if sc.cap is not None:
             out["dz_cap_m"] = min(out["dz_cap_m"], sc.cap.thickness_m)
         out["min_layer_divisions"] = 1
@@ -131,16 +144,18 @@ def _nominal(sc: EstimatedScenario) -> dict[str, float | int]:
 
 
 def resolve_mesh(sc: EstimatedScenario, given: Mapping[str, float | int], element: str,
-                 fraction: float = 1.0) -> tuple[dict[str, float | int], int]:
+                 fraction: float = 1.0, bending: bool = True
+                 ) -> tuple[dict[str, float | int], int]:
     """Every ``numerics.mesh`` key: ``given`` ones kept, the others automatic within budget.
 
-    ``fraction``: the part of the whole block the run models (the budget is on its unknowns).
+    ``fraction``: the part of the whole block the run models (the budget is on its unknowns);
+    ``bending``: as in :func:`nominal_sizes`.
 
     Returns the sizes and the index of the :data:`STEPS` entry they come from (0: the nominal
     sizes fit :data:`UNKNOWN_BUDGET`; the last one when nothing fits, which the memory check
     then reports).
     """
-    nominal = nominal_sizes(sc, float(given.get("scale", 1.0)), element)
+    nominal = nominal_sizes(sc, float(given.get("scale", 1.0)), element, bending)
     if max(sc.piles.lengths) >= sc.site.depth_m:  # the scenario refuses it, with its reason
         return {**nominal, **given}, 0
     size_max = min(SIZE_MAX, 5.0 * min(sc.piles.diameters))
@@ -185,27 +200,28 @@ def resolve_numerics(sc: EstimatedScenario, locking: str | None, fraction: float
     ``fraction``: the part of the whole block the run models
     (:func:`pilegroup.model.mirror.kept_fraction`), whose unknowns the budget bounds.
 
-    ``numerics.element = "auto"``: Q2Q1 where trilinear hexahedra lock (``locking``, the
-    scenario's reason, or None) and the Q2Q1 model fits :data:`UNKNOWN_BUDGET` at the
-    automatic sizes; else Q1Q1. A scenario made from a resolved one (``dataclasses.replace``)
-    chooses its automatic keys and an automatic element again, for what it now holds.
+    ``numerics.element = "auto"``: Q2Q1 where it fits :data:`UNKNOWN_BUDGET` at its automatic
+    sizes (the bending sizes where trilinear hexahedra lock, ``locking`` being the scenario's
+    reason, or None; else the axial sizes); else Q1Q1. A scenario made from a resolved one
+    (``dataclasses.replace``) chooses its automatic keys and an automatic element again, for
+    what it now holds.
     """
     num = sc.numerics
     given = {k: v for k, v in num.mesh.given().items() if k not in num.mesh.automatic}
     element, reason = num.element, "numerics.element"
+    bending = locking is not None
     sizes = None
     if element == "auto" or num.element_reason.startswith("auto"):
-        element, reason = "Q1Q1", Q1Q1_REASON
-        if locking is not None:
-            q2, step = resolve_mesh(sc, given, "Q2Q1", fraction)
-            if step == 0:
-                element, reason, sizes = "Q2Q1", f"auto: {locking}", q2
-            else:
-                reason = (f"auto: {locking}, but Q2Q1 exceeds the memory budget "
-                          f"({UNKNOWN_BUDGET:,} unknowns in the part modelled) at the "
-                          "automatic mesh sizes")
+        q2, step = resolve_mesh(sc, given, "Q2Q1", fraction, bending)
+        why = f"auto: {locking}" if bending else AXIAL_REASON
+        if step == 0:
+            element, reason, sizes = "Q2Q1", why, q2
+        else:
+            element, reason = "Q1Q1", (f"{why}, but Q2Q1 exceeds the memory budget "
+                                       f"({UNKNOWN_BUDGET:,} unknowns in the part modelled) at "
+                                       "the automatic mesh sizes")
     if sizes is None:
-        sizes, _ = resolve_mesh(sc, given, element, fraction)
+        sizes, _ = resolve_mesh(sc, given, element, fraction, bending)
     automatic = tuple(k for k in sizes if k not in given)
     mesh = MeshOptions(**sizes, automatic=automatic)  # type: ignore[arg-type]
     return replace(num, element=element, mesh=mesh, element_reason=reason)
@@ -229,5 +245,5 @@ def locking_warning(num: Numerics, locking: str | None) -> str | None:
             f"machine ({num.element_reason})")
 
 
-__all__ = ["LENGTHS", "Q1Q1_REASON", "STEPS", "UNKNOWN_BUDGET", "describe", "locking_warning",
+__all__ = ["AXIAL_REASON", "LENGTHS", "STEPS", "UNKNOWN_BUDGET", "describe", "locking_warning",
            "nominal_sizes", "resolve_mesh", "resolve_numerics"]

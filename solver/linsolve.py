@@ -59,12 +59,10 @@ class Preset:
             blocks overlap there (multiplicative Schwarz between them); a problem's
             ``SolverOptions.band_layers`` replaces it.
         fixed_stress: the preset needs the fixed-stress preconditioning matrix.
-        reuse_factor_its: > 0: keep the factorisation across Newton iterations and steps as
-            GMRES's preconditioner; refactor after a solve needing more iterations than this
-            beyond those of the first solve with the factorisation (a fresh block low-rank
-            factorisation is itself inexact: on the full pier at h = 1 m its first solves need
-            about 28 iterations, and a fixed limit of 20 refactored at every Newton matrix);
-            for a step's first solve, the step's next decides (:meth:`KSPSolver.new_step`).
+        reuse_factor_its: > 0: keep the LU across Newton iterations and steps as FGMRES's
+            preconditioner; refactor after a solve needing this many iterations more than the
+            LU's first solve (a fresh block low-rank LU is itself inexact); see
+            :class:`KSPSolver`.
         fallback: the preset that takes over (with one warning line) when a solve with this
             one fails; ``None``: the failure is the step's.
         keep_blocks: field-split blocks whose preconditioner (e.g. an LU factorisation) is
@@ -106,14 +104,8 @@ PRESETS: dict[str, Preset] = {
             "mat_mumps_icntl_14": 80,  # workspace increase, percent
         },
     ),
-    # MUMPS LU reused across Newton iterations and steps as the preconditioner of FGMRES on
-    # the current Jacobian while the tangent changes little (consolidation, creep); refactored
-    # after a solve needing 20 iterations more than its first. Being a preconditioner, it is
-    # block low-rank (1e-6: fewer iterations and refactorisations than 1e-5; contribution
-    # blocks uncompressed: 30 % faster, 4 % more memory) and single precision (40 % less time
-    # per solve and factorisation, half the memory). FGMRES's residual is the true one although
-    # a single-precision solve is linear only to rounding (GMRES missed the inexact Newton
-    # test). docs/solver.md, docs/benchmarks.md.
+    # MUMPS LU kept across Newton iterations and steps as FGMRES's preconditioner; block
+    # low-rank and single precision (docs/solver.md, "Linear solvers"; docs/benchmarks.md).
     "direct_reuse": Preset(
         "direct_reuse",
         {
@@ -201,6 +193,16 @@ for _lu in ("direct_reuse", "direct_reuse_ooc"):  # their fallbacks: the same LU
 PRESETS["fieldsplit_kept"] = dataclasses.replace(
     PRESETS["fieldsplit_pier"], name="fieldsplit_kept", keep_blocks=("structure",), keep_its=60)
 
+#: A step whose dt differs from the kept LU's by this factor (either way) refactors at its
+#: first solve: the Jacobian's flow block scales with dt (docs/solver.md, "Linear solvers").
+REFACTOR_DT_RATIO = 8.0
+
+
+def dt_ratio(a: float, b: float) -> float:
+    """``max(a / b, b / a)`` of two step sizes (1 when either is 0)."""
+    return 1.0 if a <= 0.0 or b <= 0.0 else max(a / b, b / a)
+
+
 #: ``(name, index set, near-nullspace or None)`` of every block of a field split.
 Splits = list[tuple[str, PETSc.IS, PETSc.NullSpace | None]]
 
@@ -285,13 +287,13 @@ def check_reason(ksp: PETSc.KSP, what: str = "linear solve") -> int:
 class KSPSolver:
     """The problem's KSP from a preset, with factorisation reuse and a fallback preset.
 
-    Presets with ``reuse_factor_its`` keep the last LU factorisation as the preconditioner of
-    GMRES across Newton iterations and steps (the matrix itself is always the current Jacobian,
-    so Newton stays exact); a solve that needs more than ``reuse_factor_its`` iterations
-    beyond the factorisation's first solve, or fails, triggers a new factorisation (and a
-    re-solve when it failed); for a step's first solve (:meth:`new_step`) the step's next
-    decides. A factorisation made under other constraints (undrained steps release the
-    drainage conditions) is refactored at once. When a Krylov solve of a preset that has a
+    Presets with ``reuse_factor_its`` keep the last LU as FGMRES's preconditioner across
+    Newton iterations and steps (the matrix is the current Jacobian: Newton stays exact); a
+    solve needing more than ``reuse_factor_its`` iterations beyond the LU's first solve, or
+    failing, refactors (and re-solves when it failed); for a step's first solve
+    (:meth:`new_step`) the step's next decides. An LU made under other constraints (undrained
+    steps) or for a step :data:`REFACTOR_DT_RATIO` times shorter or longer is refactored at
+    once. When a Krylov solve of a preset that has a
     ``fallback`` fails (or a step fails with it at the stepper's minimum step),
     :meth:`fall_back` replaces the preset for the rest of the run (one warning line;
     :attr:`fallbacks` records it).
@@ -340,6 +342,7 @@ class KSPSolver:
         self._kept = False  # the blocks of keep_blocks keep their set-up at the next one
         self._stale = False  # their set-up is older than the current matrix
         self._factor_undrained: bool | None = None  # constraints of the kept factorisation
+        self._dt = self._factor_dt = 0.0  # the step's dt and that of the kept factorisation
 
     def close(self) -> None:
         """Destroy the KSP (collective) and remove the out-of-core folder."""
@@ -376,9 +379,9 @@ class KSPSolver:
         pre = self._preconditioning()
         self.ksp.setOperators(A, pre if pre is not None else A)
 
-    def new_step(self) -> None:
-        """The next solve is the first of a step (see :meth:`_solve`)."""
-        self._step_start = True
+    def new_step(self, dt: float = 0.0) -> None:
+        """The next solve is the first of a step of ``dt`` days (see :meth:`_solve`)."""
+        self._step_start, self._dt = True, dt
 
     def _set_reuse(self, reuse: bool) -> None:
         self.ksp.getPC().setReusePreconditioner(reuse)
@@ -470,8 +473,8 @@ class KSPSolver:
             return self._solve_keeping_blocks(rhs, sol)
         limit = self.spec.reuse_factor_its
         first, self._step_start = self._step_start, False
-        if limit and self._reusing and (self._factor_undrained != undrained
-                                        or (first and self._doubtful)):
+        if limit and self._reusing and (self._factor_undrained != undrained or (first and (
+                self._doubtful or dt_ratio(self._dt, self._factor_dt) >= REFACTOR_DT_RATIO))):
             self._set_reuse(False)
         self.ksp.solve(rhs, sol)
         if limit and self.ksp.getConvergedReason() < 0 and self._reusing:
@@ -488,12 +491,10 @@ class KSPSolver:
             kept = self._reusing
             if not kept:
                 self.refactorisations += 1
-                self._factor_undrained = undrained
+                self._factor_undrained, self._factor_dt = undrained, self._dt
                 self._fresh_its = its
             within = its <= self._fresh_its + limit
-            # a step's first solve beyond the limit leaves the decision to the next: a step's
-            # first matrix is unlike its next ones, which the kept LU may still serve; if the
-            # step ends there, the next step's first solve refactors (docs/solver.md)
+            # a step's first matrix is unlike its next ones: the next solve decides
             self._doubtful = first and kept and not within
             self._set_reuse(within or self._doubtful)
         return its

@@ -353,7 +353,7 @@ class BiotProblem(MonolithicAlgebra):
         self.coef.dt.value = dt
         self.load_factor = load_factor
         self.undrained = dt == 0.0
-        self.linear_solver.new_step()
+        self.linear_solver.new_step(dt)
         for ld, c in self._load_consts:
             if ld.action is None:
                 c.value = ld.pressure * (load_factor if ld.ramp else 1.0)

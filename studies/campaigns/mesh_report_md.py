@@ -80,14 +80,16 @@ def _size_section(info: StudyInfo, sizes: list[dict[str, Any]]) -> list[str]:
     return lines
 
 
-def _gci_section(table: dict[str, GCIResult], pub: MeshStudyReference | None) -> list[str]:
+def _gci_section(table: dict[str, GCIResult], pub: MeshStudyReference | None,
+                 element: str) -> list[str]:
     lines = ["## Convergence: Richardson extrapolation and grid convergence index", ""]
     if not table:
         return lines + ["Needs three sizes that ran to completion; fewer did.", ""]
     g0 = next(iter(table.values()))
     lines += [f"From the three finest sizes that ran, h = {g0.h[0]:g}, {g0.h[1]:g}, "
               f"{g0.h[2]:g} m (r21 = {g0.r21:.3g}, r32 = {g0.r32:.3g}), at the last output "
-              "time. h is the element size at the pile surfaces (`numerics.mesh.size_m`); the "
+              "time. h is the element size at the pile surfaces (`numerics.mesh.size_m`) of the "
+              f"{element} pair; the "
               "far-field and vertical sizing are the same for every size, so h is the refined "
               "length. Observed order p, extrapolated value and GCI by Celik et al. (2008) "
               "(Fs = 1.25).", "",
@@ -148,7 +150,7 @@ def report_markdown(info: StudyInfo, sizes: list[dict[str, Any]], table: dict[st
              "the per-size numbers of this report in `mesh_study.csv` and `gci.csv`.", ""]
     pub = info.published
     lines += _size_section(info, sizes)
-    lines += _gci_section(table, pub)
+    lines += _gci_section(table, pub, info.scenario.numerics.element)
     theirs = (f", and the published study's ({pub.label}: its hours, against the extrapolation "
               "of its own three finest sizes)" if pub is not None and pub.hours else "")
     lines += ["## Error against computation time", "",

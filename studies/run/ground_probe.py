@@ -94,12 +94,13 @@ class GroundProbe:
     def _shaft_pressure(self, k: int, depth: np.ndarray) -> np.ndarray:
         """Excess pore pressure (kPa) in the soil at pile ``k``'s shaft at ``depth`` (collective).
 
-        Sampled just outside the shaft (0.1 % of the radius) on the side at 45 degrees to x and
-        y, which a reduced model keeps (it holds x >= 0 and y >= 0 about its mirror planes).
+        Sampled just outside the shaft (0.1 % of the meshed radius, beyond the polygon's corner)
+        on the side at 45 degrees to x and y, which a reduced model keeps (it holds x >= 0 and
+        y >= 0 about its mirror planes).
         """
         if k not in self._shaft_p:
             x, y = self.piles.xy[k - 1]
-            rho = 0.5 * self.piles.diameters[k - 1] * 1.001 / np.sqrt(2.0)
+            rho = self.piles.radii[k - 1] * 1.001 / np.sqrt(2.0)
             self._shaft_p[k] = PointSampler(self._p, np.column_stack(
                 [np.full(depth.size, x + rho), np.full(depth.size, y + rho), -depth]))
         return self._shaft_p[k]()

@@ -49,6 +49,7 @@ from mpi4py import MPI
 from pilegroup.fileio import write_text_atomic
 from pilegroup.geometry import groups
 from pilegroup.geometry.adapter import ResolvedGeometry
+from pilegroup.geometry.plan import meshed_radii
 from pilegroup.model import Scenario
 from pilegroup.solver import BiotProblem
 from pilegroup.solver.probes import SettlementProbe
@@ -83,6 +84,8 @@ class PileProbe:
         self.xy = np.array(sc.piles.xy, dtype=float)
         #: every pile's diameter (m), aligned with ``xy`` (pile i at index i - 1)
         self.diameters = np.array(sc.piles.diameters, dtype=float)
+        #: every pile's meshed circumradius (m): its polygon's corners lie on it
+        self.radii = np.array(meshed_radii(geo.spec), dtype=float)
         # every pile of the foundation from its mirror image in a symmetry-reduced mesh, whose
         # cut piles carry their meshed fraction of the load
         spec = geo.spec
@@ -122,8 +125,8 @@ class PileProbe:
             owned = np.arange(x.shape[0]) < nloc
             self._x = x
             r = np.linalg.norm(x[:, None, :2] - self.xy[None, :, :], axis=2)
-            # a node is on pile k's shaft within its own radius (+0.1 %): piles do not overlap
-            on = (r < 0.5 * self.diameters[None, :] * 1.001) & owned[:, None] \
+            # a node is on pile k's shaft within its meshed radius (+0.1 %): piles do not overlap
+            on = (r < self.radii[None, :] * 1.001) & owned[:, None] \
                 & (self._itf.A[:, None] > 0)
             self._node_pile = np.where(on.any(axis=1), np.argmax(on, axis=1) + 1, 0)
         self.profile_rows: list[str] = []

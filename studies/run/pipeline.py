@@ -29,6 +29,7 @@ from pilegroup.errors import StepFailure
 from pilegroup.geometry import groups
 from pilegroup.geometry.adapter import ResolvedGeometry
 from pilegroup.geometry.meshdata import MeshData
+from pilegroup.geometry.plan import meshed_radii
 from pilegroup.geometry.symmetry import PLANES
 from pilegroup.model import Scenario, Stage
 from pilegroup.model.analysis import InterfaceOptions
@@ -100,9 +101,8 @@ def band_layers(h: float) -> int:
     """Cell layers of soil in the exact block of ``fieldsplit_pier`` at pile mesh size ``h``.
 
     Enough layers of the size ``h`` (m, at the pile surfaces) for :data:`BAND_WIDTH_M`. On the
-    full Pier 667 the iterations follow the band's width, not its layer count: two
-    layers at h = 1 m and six at h = 0.3 m need about the same (docs/benchmarks.md, "The band
-    and the smoother against the mesh size"), while two at 0.3 m need 60 % more.
+    full Pier 667 the iterations follow the band's width, not its layer count: two layers at
+    h = 1 m and six at 0.3 m need about the same, two at 0.3 m 60 % more (docs/benchmarks.md).
     """
     return max(1, math.ceil(BAND_WIDTH_M / h - 1e-9))
 
@@ -166,9 +166,9 @@ def build_problem(sc: Scenario, geo: ResolvedGeometry, md: MeshData, preset: str
                          band_layers=band_layers(h))
     return BiotProblem(md, materials, disc, displacement_bcs=dbcs,
                        pressure_bcs=drainage(sc), loads=loads, options=opts,
-                       interface=interface_coupling(sc, h), installation=installation(sc),
-                       install_later=sc.installation_stage is not None,
-                       water_table=water_table(sc),
+                       interface=interface_coupling(sc, h),
+                       installation=installation(sc, meshed_radii(geo.spec)),
+                       install_later=sc.installation_stage is not None, water_table=water_table(sc),
                        seepage=[(-d, u) for d, u in seepage(sc.site, sc.layers)])
 
 
@@ -177,17 +177,18 @@ def water_table(sc: Scenario) -> float | None:
     return -sc.site.water_table_depth_m if sc.site.water_table_depth_m > 0.0 else None
 
 
-def installation(sc: Scenario) -> InstallationExcess | None:
+def installation(sc: Scenario, radii: list[float]) -> InstallationExcess | None:
     """The piles' installation pore pressures (every pile of the whole foundation), or None.
 
-    Each pile's cavity has its own radius and toe (its diameter and length in soil).
+    Each pile's cavity has its own radius and toe: ``radii``, the meshed circumradii (every
+    shaft node at r0), and its length in soil.
     """
     p = sc.piles
     ins = p.installation
     if ins is None:
         return None
-    return InstallationExcess(tuple((x, y, d / 2, -length) for (x, y), d, length
-                                    in zip(p.xy, p.diameters, p.lengths, strict=True)),
+    return InstallationExcess(tuple((x, y, r0, -length) for (x, y), r0, length
+                                    in zip(p.xy, radii, p.lengths, strict=True)),
                               ins.excess_pore_pressure_ratio, ins.radius_ratio)
 
 

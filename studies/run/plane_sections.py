@@ -39,7 +39,7 @@ from pilegroup.solver.probes import PointSampler
 
 #: Distance (m) within which a node is on a plane (nodes and planes share their coordinates).
 Z_TOL = 1e-6
-#: A node is on pile ``i`` within its radius times this (piles do not overlap).
+#: A node is on pile ``i`` within its meshed radius times this (piles do not overlap).
 RADIUS_FACTOR = 1.001
 
 
@@ -47,18 +47,21 @@ class PlaneForces:
     """Section actions of every meshed pile at its head and element-layer boundaries.
 
     Args:
-        sc: the scenario (pile positions and diameters).
+        sc: the scenario (pile positions).
         pb: the problem (the structure's stress, displacement and loads).
         kept: the meshed piles (numbers from 1).
+        radii: every pile's meshed circumradius (m;
+            :func:`~pilegroup.geometry.plan.meshed_radii`).
     """
 
-    def __init__(self, sc: Scenario, pb: BiotProblem, kept: list[int]) -> None:
+    def __init__(self, sc: Scenario, pb: BiotProblem, kept: list[int],
+                 radii: list[float]) -> None:
         self.comm = pb.comm
         self.kept = list(kept)
         body = pb.body("structure")  # the whole mesh when tied
         mesh, V = body.mesh, body.V
         xy = [tuple(map(float, p)) for p in sc.piles.xy]
-        radius = [0.5 * d for d in sc.piles.diameters]
+        radius = list(radii)
         D0 = fem.functionspace(mesh, ("DG", 0))
         self._w = fem.Function(D0)
         odd, even, planes = np.zeros(self._w.x.array.size), np.zeros(self._w.x.array.size), {}

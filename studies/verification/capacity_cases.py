@@ -18,8 +18,8 @@ geostatic state, then a capacity stage that raises the head load until the pile 
 
 The soil is linear elastic and drained over the ramp (k = 1 m/day), so only the interface laws
 limit the resistance, and the capacity is ``Q_ult = k A_s + N_c c_u A_b`` with the
-meshed pile's areas (an inscribed N-gon: ``A_s = 2 N r sin(pi / N) L``, ``A_b = N r^2
-sin(2 pi / N) / 2``). The case compares the run's ultimate capacity on the head's curve (the
+meshed pile's areas (an N-gon of the circle's area, circumradius ``R``: ``A_s = 2 N R sin(pi /
+N) L``, ``A_b = pi r^2``). The case compares the run's ultimate capacity on the head's curve (the
 applied head load against the head settlement, as a load test reads it: the smaller of plunging
 and 10 % d settlement, ``summary.json``'s ``capacity.group`` of this one-pile foundation) with it;
 tolerance 5 %. The load step of the ramp (``max_load_kN / 200``, 0.6 % of ``Q_ult``) bounds the
@@ -41,6 +41,7 @@ from typing import Any
 
 from mpi4py import MPI
 
+from pilegroup.geometry.plan import polygon_radius
 from pilegroup.model.units import GAMMA_WATER, G
 from pilegroup.studies.results.tables import CAPACITY_CSV
 from pilegroup.studies.verification.common import run_pipeline, world
@@ -59,8 +60,11 @@ OVERLOAD, STEPS = 1.25, 200
 
 
 def capacity_reference(n_sides: int) -> dict[str, float]:
-    """The closed-form capacity (kN) of the pile meshed as an inscribed ``n_sides``-gon."""
-    r = D / 2.0
+    """The closed-form capacity (kN) of the pile meshed as an ``n_sides``-gon.
+
+    The polygon has the circle's area (:func:`~pilegroup.geometry.plan.polygon_radius`).
+    """
+    r = polygon_radius(D / 2.0, n_sides)
     perimeter = 2.0 * n_sides * r * math.sin(math.pi / n_sides)
     base = 0.5 * n_sides * r * r * math.sin(2.0 * math.pi / n_sides)
     shaft = TAU_F * perimeter * L
@@ -117,7 +121,7 @@ def pile_capacity(size: str = "fast", comm: MPI.Comm | None = None) -> CaseResul
         "pile-capacity", err, tol, bool(err <= tol), time.perf_counter() - t0, n["dofs"],
         n["newton"], n["steps"],
         reference="k A_s + N_c c_u A_b: shaft strength 2 c / sqrt 3 (default Eq. 15, phi = 0), "
-                  "toe N_c = 9 (Skempton 1951), meshed N-gon areas",
+                  "toe N_c = 9 (Skempton 1951), meshed N-gon areas (the circle's area)",
         details={**ref, "ultimate_kN_run": got, "governing": head["governing"],
                  "plunging_kN": head["plunging"]["load_kN"],
                  "settlement_10pct_d_kN": head["settlement_10pct_d"]["load_kN"],

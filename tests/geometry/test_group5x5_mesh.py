@@ -31,6 +31,7 @@ from pilegroup.geometry.adapter import resolve_geometry
 from pilegroup.geometry.convert import build_mesh, gmsh_session
 from pilegroup.geometry.far_field import far_field
 from pilegroup.geometry.pier import GMSH_OPTIONS
+from pilegroup.geometry.plan import polygon_radius
 from pilegroup.geometry.quadfix import edge_ratio
 from pilegroup.model import bundled_text, scenario_from_dict
 
@@ -41,7 +42,7 @@ _spec.loader.exec_module(mc)
 
 REL = 1e-9
 N = 28
-NGON_DEFICIT = 1.0 - N * math.sin(2 * math.pi / N) / (2 * math.pi)
+NGON_DEFICIT = 0.0  # the meshed N-gon has the circle's area (plan.polygon_radius)
 #: The plan sizing of the failing run (``size_m = 2`` with 28 edges around a pile), with
 #: coarse vertical sizes.
 MESH = {"size_m": 2.0, "n_circ_min": N, "far_field_size_m": 64.0, "growth": 1.6,
@@ -63,7 +64,9 @@ def scenario(cap=14.0, spacing=3.0, symmetry="auto"):
 
 
 def poly_area(r):
-    return 0.5 * N * r * r * math.sin(2 * math.pi / N)
+    """The meshed N-gon's area (its corners on ``polygon_radius``): the circle's."""
+    big = polygon_radius(r, N)
+    return 0.5 * N * big * big * math.sin(2 * math.pi / N)
 
 
 def check_mesh_data(spec, md):

@@ -14,14 +14,22 @@ from pilegroup.model.mesh_defaults import UNKNOWN_BUDGET
 from pilegroup.model.mesh_estimate import estimated_unknowns
 from pilegroup.model.mirror import kept_fraction
 
-#: The sizes the Pier 667 mesh study validated (docs/results.md), which the rules give.
+#: The trilinear sizes of Pier 667: those its mesh study validated (docs/results.md).
 PIER_SIZES = {"size_m": 1.0, "far_field_size_m": 16.0, "growth": 1.6, "n_circ_min": 28,
               "dz_surface_m": 1.0, "dz_toe_m": 1.0, "dz_max_m": 6.0, "dz_max_deep_m": 15.0,
               "dz_growth": 1.4, "dz_cap_m": 1.5, "min_layer_divisions": 2}
+#: Its default: Q2Q1 at the axial sizes (every length 4 times the trilinear one, the size next
+#: to the piles from the clear gap of 1.5 m, the cap's at most its 2.5 m; 12 edges).
+PIER_AXIAL = {"size_m": 3.0, "far_field_size_m": 32.0, "growth": 1.6, "n_circ_min": 12,
+              "dz_surface_m": 4.0, "dz_toe_m": 4.0, "dz_max_m": 24.0, "dz_max_deep_m": 60.0,
+              "dz_growth": 1.4, "dz_cap_m": 2.5, "min_layer_divisions": 1}
 
 
-def doc(name="pier667"):
-    return tomllib.loads(bundled_text(name))
+def doc(name="pier667", element=None):
+    data = tomllib.loads(bundled_text(name))
+    if element is not None:
+        data.setdefault("numerics", {})["element"] = element
+    return data
 
 
 def group(n, d, length=40.0, lateral=False):
@@ -53,12 +61,40 @@ def test_bundled_scenarios_use_the_defaults(name):
     assert set(sc.numerics.mesh.automatic) == set(PIER_SIZES)
 
 
-def test_pier_defaults_are_the_validated_mesh():
+def test_pier_defaults_are_q2q1_at_the_axial_sizes():
     sc = scenario_from_dict(doc())
-    assert sc.numerics.mesh.given() == PIER_SIZES | {"scale": 1.0}
-    assert sc.numerics.element == "Q1Q1"
+    assert sc.numerics.mesh.given() == pytest.approx(PIER_AXIAL | {"scale": 1.0})
+    assert sc.numerics.element == "Q2Q1"
     assert sc.numerics.element_reason.startswith("auto: every action is vertical")
-    assert sc.locking_reason() is None
+    assert sc.locking_reason() is None and sc.discretisation_warning() is None
+
+
+def test_an_explicit_q1q1_gets_the_validated_trilinear_mesh():
+    sc = scenario_from_dict(doc(element="Q1Q1"))
+    assert sc.numerics.mesh.given() == PIER_SIZES | {"scale": 1.0}
+    assert sc.numerics.element_reason == "numerics.element"
+
+
+def test_vertical_actions_take_twice_the_bending_lengths_and_12_edges():
+    """The same 2 x 2 group with and without a horizontal force: Q2Q1 both; without it every
+    automatic length twice the bending one and 12 edges around a pile instead of 16."""
+    axial = scenario_from_dict(group(2, 1.2)).numerics
+    bending = scenario_from_dict(group(2, 1.2, lateral=True)).numerics
+    assert axial.element == bending.element == "Q2Q1"
+    assert (axial.mesh.n_circ_min, bending.mesh.n_circ_min) == (12, 16)
+    for k in ("size_m", "far_field_size_m", "dz_surface_m", "dz_toe_m", "dz_max_m",
+              "dz_max_deep_m"):
+        assert getattr(axial.mesh, k) == pytest.approx(2.0 * getattr(bending.mesh, k)), k
+    assert axial.mesh.dz_cap_m == bending.mesh.dz_cap_m == 2.0  # the cap's thickness
+
+
+def test_where_q2q1_exceeds_the_budget_vertical_actions_take_q1q1_without_a_warning():
+    data = doc()
+    data.setdefault("numerics", {})["symmetry"] = "none"  # the whole pier
+    sc = scenario_from_dict(data)
+    assert sc.numerics.element == "Q1Q1" and "memory budget" in sc.numerics.element_reason
+    assert sc.numerics.mesh.given() == PIER_SIZES | {"scale": 1.0}
+    assert sc.discretisation_warning() is None  # nothing bends
 
 
 def test_given_keys_are_kept_and_others_stay_automatic():
@@ -68,7 +104,7 @@ def test_given_keys_are_kept_and_others_stay_automatic():
     m = sc.numerics.mesh
     assert (m.size_m, m.n_circ_min) == (0.3, 16)
     assert "size_m" not in m.automatic and "dz_max_m" in m.automatic
-    assert m.dz_max_m == PIER_SIZES["dz_max_m"]
+    assert m.dz_max_m == PIER_AXIAL["dz_max_m"]
 
 
 def test_given_far_field_below_the_automatic_size_keeps_the_scenario_valid():
@@ -98,9 +134,11 @@ def test_the_budget_is_on_the_part_modelled():
     """A 6 x 6 group of 1 m piles in the pier's soil: its quarter fits the budget at the nominal
     sizes (h = d, 28 edges around a pile), where its whole block would not; the full model of
     the same group (``numerics.symmetry = "none"``) coarsens to fit."""
-    quarter = scenario_from_dict(group(6, 1.0))
+    quarter_data = group(6, 1.0)
+    quarter_data["numerics"] = {"element": "Q1Q1"}
+    quarter = scenario_from_dict(quarter_data)
     data = group(6, 1.0)
-    data.setdefault("numerics", {})["symmetry"] = "none"
+    data["numerics"] = {"element": "Q1Q1", "symmetry": "none"}
     full = scenario_from_dict(data)
     assert estimated_unknowns(quarter) > UNKNOWN_BUDGET
     assert (quarter.numerics.mesh.size_m, quarter.numerics.mesh.n_circ_min) == (1.0, 28)
@@ -115,10 +153,14 @@ def test_loads_that_break_a_mirror_plane_halve_the_part_not_quarter_it():
 
 
 def test_sizes_follow_the_pile_diameter_and_the_gap():
-    small = scenario_from_dict(group(2, 0.6)).numerics.mesh
-    big = scenario_from_dict(group(2, 1.2)).numerics.mesh
+    def q1(data):
+        data["numerics"] = {"element": "Q1Q1"}
+        return data
+
+    small = scenario_from_dict(q1(group(2, 0.6))).numerics.mesh
+    big = scenario_from_dict(q1(group(2, 1.2))).numerics.mesh
     assert (small.size_m, big.size_m) == (0.6, 1.2)
-    data = group(2, 1.0)
+    data = q1(group(2, 1.0))
     data["piles"]["spacing_m"] = [1.5, 1.5]  # a clear gap of 0.5 m between shafts
     data["cap"] |= {"size_x_m": 3.5, "size_y_m": 3.5}
     assert scenario_from_dict(data).numerics.mesh.size_m == pytest.approx(0.5)
@@ -147,7 +189,9 @@ def test_horizontal_actions_choose_q2q1_where_it_fits_with_a_reason():
 
 def test_q2q1_spans_two_trilinear_lengths_within_the_gap():
     data = group(2, 1.2, lateral=True)
-    q1 = scenario_from_dict(group(2, 1.2)).numerics.mesh
+    trilinear = group(2, 1.2)
+    trilinear["numerics"] = {"element": "Q1Q1"}
+    q1 = scenario_from_dict(trilinear).numerics.mesh
     sc = scenario_from_dict(data)
     q2 = sc.numerics.mesh
     assert sc.numerics.element == "Q2Q1"
@@ -169,18 +213,18 @@ def test_an_explicit_q1q1_with_horizontal_actions_warns():
 
 def test_record_names_every_size_and_where_it_came_from():
     rec = scenario_from_dict(doc()).discretisation()
-    assert rec["element"] == "Q1Q1" and rec["mesh"] == PIER_SIZES | {"scale": 1.0}
+    assert rec["element"] == "Q2Q1" and rec["mesh"] == pytest.approx(PIER_AXIAL | {"scale": 1.0})
     assert sorted(rec["automatic"]) == sorted(PIER_SIZES)
 
 
 def test_scale_refines_every_automatic_length_and_the_edges_around_a_pile():
     data = doc()
-    data["numerics"] = {"mesh": {"scale": 1.5, "dz_cap_m": 1.5}}
+    data["numerics"] = {"element": "Q1Q1", "mesh": {"scale": 1.5, "dz_cap_m": 1.5}}
     m = scenario_from_dict(data).numerics.mesh
     assert m.size_m == pytest.approx(1.5) and m.dz_max_deep_m == pytest.approx(22.5)
     assert m.dz_cap_m == 1.5  # given: not scaled
     assert m.n_circ_min == 20  # 28 / 1.5 to the nearest multiple of 4
-    data["numerics"] = {"mesh": {"scale": 0.5}}  # refining: the edges too, not only lengths
+    data["numerics"] = {"element": "Q1Q1", "mesh": {"scale": 0.5}}  # the edges refine too
     m = scenario_from_dict(data).numerics.mesh
     assert m.size_m == pytest.approx(0.5) and m.n_circ_min == 56
     data["numerics"] = {"mesh": {"scale": 0.1}}

@@ -198,3 +198,31 @@ def test_first_solve_of_a_step_leaves_the_refactorisation_to_the_next():
     _, factors = solve(base)
     assert factors == 3
     ls.close()
+
+
+def test_a_step_far_longer_or_shorter_than_the_kept_lus_refactors_at_once():
+    """The Jacobian's flow block scales with dt: a step whose dt is REFACTOR_DT_RATIO times
+    the kept LU's (or a fraction of it) refactors at its first solve, even on the same matrix;
+    a step within the ratio keeps the LU."""
+    from pilegroup.solver.linsolve import REFACTOR_DT_RATIO, KSPSolver, dt_ratio
+
+    assert dt_ratio(1.0, 8.0) == dt_ratio(8.0, 1.0) == 8.0 and dt_ratio(0.0, 5.0) == 1.0
+    n = 200
+    A = _shifted_laplacian(n, n)
+    ls = KSPSolver(MPI.COMM_SELF, A, "reuse_dt_", "direct_reuse", None, lambda p: None)
+    b, x = A.createVecLeft(), A.createVecLeft()
+    b.setArray(np.sin(np.arange(n) + 1.0))
+
+    def step(dt):
+        ls.set_operators(A, None)
+        ls.new_step(dt)
+        ls.solve(b, x, False)
+        return ls.refactorisations
+
+    assert step(1.0) == 1
+    assert step(0.5 * REFACTOR_DT_RATIO) == 1  # within the ratio: kept
+    assert step(REFACTOR_DT_RATIO) == 2  # 8 times the LU's dt of 1 day: refactored
+    assert step(REFACTOR_DT_RATIO / 2) == 2
+    assert step(0.9) == 3  # 8.9 times shorter than the LU's
+    assert step(0.0) == 3  # no flow block (geostatic, undrained): no comparison
+    ls.close()

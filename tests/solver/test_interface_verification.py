@@ -33,8 +33,10 @@ def test_shaft_capacity(quadrature):
     assert np.allclose(loads[-3:], d["capacity_actual_sigma_n_kN"], rtol=2e-4)
     # in-situ tractions lump exactly onto the closed form P_h (k L + 3 alpha K0 gamma' L^2/2)
     assert d["err_insitu"] < 1e-12
-    # the polygonal perimeter (8 sides) is used, not pi d
-    assert d["perimeter_m"] == pytest.approx(8 * np.sin(np.pi / 8), rel=1e-12)
+    # the polygonal perimeter (8 sides, the circle's area: R^2 = pi / 4 / (4 sin(pi / 4)) for
+    # d = 1 m) is used, not pi d
+    big = np.sqrt(np.pi / 4 / (4 * np.sin(np.pi / 4)))
+    assert d["perimeter_m"] == pytest.approx(16 * big * np.sin(np.pi / 8), rel=1e-12)
 
 
 @pytest.mark.parametrize("quadrature", QUADRATURES)

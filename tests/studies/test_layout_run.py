@@ -119,8 +119,8 @@ def test_half_model_with_both_piles_reported(runs):
 
 
 def test_free_heads_share_the_load_by_head_area(runs):
-    def octagon(d):
-        return 0.5 * 8 * (d / 2) ** 2 * math.sin(2 * math.pi / 8)
+    def octagon(d):  # the meshed octagon has the circle's area
+        return math.pi * d * d / 4
 
     share = octagon(1.0) / (octagon(1.0) + octagon(0.6))
     heads = _heads(runs["free"])

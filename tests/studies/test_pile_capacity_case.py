@@ -23,10 +23,12 @@ from pilegroup.studies.verification.capacity_cases import (
 
 
 def test_reference_is_the_textbook_sum_for_the_meshed_polygon():
-    """16-gon of radius 0.5: perimeter 16 sin(pi/16), area 2 sin(pi/8); k = 2 c / sqrt 3."""
+    """16-gon of the circle's area (d = 1 m): its circumradius R from 8 R^2 sin(pi / 8) =
+    pi / 4, perimeter 32 R sin(pi / 16), base pi / 4; k = 2 c / sqrt 3."""
     ref = capacity_reference(16)
-    shaft = 2 * 20.0 / math.sqrt(3) * 16 * math.sin(math.pi / 16) * 5.0
-    toe = 9 * 20.0 * 2 * math.sin(math.pi / 8)
+    big = math.sqrt(math.pi / 4 / (8 * math.sin(math.pi / 8)))
+    shaft = 2 * 20.0 / math.sqrt(3) * 32 * big * math.sin(math.pi / 16) * 5.0
+    toe = 9 * 20.0 * math.pi / 4
     assert ref["shaft_kN"] == pytest.approx(shaft, rel=1e-14)
     assert ref["toe_kN"] == pytest.approx(toe, rel=1e-14)
     assert capacity_reference(4096)["ultimate_kN"] == pytest.approx(

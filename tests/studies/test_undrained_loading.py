@@ -20,7 +20,7 @@ def test_random_layouts_are_valid_and_repeatable(seed):
     a, b = random_layout(seed), random_layout(seed)
     assert a == b
     sc = scenario_from_dict(fill_scenario(a))
-    assert sc.numerics.element == "Q1Q1" and sc.stages[-1].kind == "surcharge"
+    assert sc.numerics.element == "Q2Q1" and sc.stages[-1].kind == "surcharge"
 
 
 def test_uniform_fill_gives_uniform_pressure_on_five_meshes():
