@@ -63,8 +63,8 @@ N_CIRC = 28
 Q2_LENGTH, N_CIRC_Q2 = 2.0, 16
 #: With vertical actions only nothing bends: Taylor–Hood's lengths times ``AXIAL_LENGTH`` and
 #: :data:`N_CIRC_AXIAL` edges around a pile. On ``pier667`` (docs/benchmarks.md, "Vertical
-#: actions only") 0.6 % from Q2Q1 at the bending sizes with 98,458 unknowns against 168,993, in
-#: 55 against 95 s; the edges around a pile set the difference (8 edges: 1.7 %).
+#: actions only") settlement and largest moment within 0.1 and 0.3 % of 16 edges at lengths
+#: 1.5 times shorter; 8 edges keep the settlement but put the moment 21 % off.
 AXIAL_LENGTH, N_CIRC_AXIAL = 2.0, 12
 Q2_LENGTHS = ("dz_surface_m", "dz_toe_m", "dz_max_m", "dz_max_deep_m", "dz_cap_m")
 #: Growth ratios in plan and in depth.

@@ -6,7 +6,8 @@
 
 Fast tier: the lateral verification pile of ``pilegroup verify lateral-single-pile``
 (studies/verification/lateral_cases.py: d = 0.6 m, L = 15 m, E_p/G* = 6.4e3, l_c = 7.3 m,
-tied to linear elastic soil, no cap, Q2Q1 on its default mesh), about 10 s a run:
+tied to linear elastic soil, no cap, Q2Q1 on its default mesh) in a 40 m x 40 m x 30 m block
+(:data:`SMALL_SITE`), about 10 s a run:
 
 * under its H = 50 kN and M = 20 kN m at the ground surface (the verification's own case, half
   model): the head row is H and M (statics: the section through the loaded head carries the
@@ -14,8 +15,9 @@ tied to linear elastic soil, no cap, Q2Q1 on its default mesh), about 10 s a run
 * under H alone, the whole model (no symmetry condition makes y components zero): the largest
   moment against Randolph (1981), ``M_max = 0.1 H l_c`` at about ``l_c / 3`` for a free-head
   flexible pile in homogeneous soil (15 %: his expressions fit his own finite element runs to
-  about 10 %, this mesh is 4 % stiffer than his head deflection and samples the profile at its
-  element layers, 1.4-3.4 m apart at that depth; measured 33.5 kN m, 9 % below, at 1.37 m); at
+  about 10 %, this mesh and block are 7 % stiffer than his head deflection and the profile is
+  sampled at the element layers, 1.4-3.4 m apart at that depth; measured 33.7 kN m, 8 % below,
+  at 1.37 m); at
   the toe, L = 2 l_c deep, the shear and moment are below 1 % of H and of H l_c (a flexible
   pile: the response dies out within l_c; measured 0.2 % and 0.001 %); the y components, with
   no load in y on a mesh mirror-symmetric about y = 0, below 1e-6 of the x ones (measured
