@@ -150,9 +150,18 @@ def _scenario(small_pile_source, tmp_path, sets=()):
 
 
 def test_installation_cavities_have_each_piles_radius_and_toe(small_pile_source, tmp_path):
+    """Each cavity's r0 is its pile's meshed circumradius (every shaft node at the wall)."""
+    from pilegroup.geometry.adapter import resolve_geometry
+    from pilegroup.geometry.plan import circumferential_divisions, meshed_radii, polygon_radius
+
     sets = ("piles.installation={excess_pore_pressure_ratio = 0.3, radius_ratio = 8.0}",)
-    ins = installation(_scenario(small_pile_source, tmp_path, sets))
-    assert ins.piles == ((-1.5, 0.0, 0.5, -12.0), (1.5, 0.0, 0.3, -8.0))
+    sc = _scenario(small_pile_source, tmp_path, sets)
+    spec = resolve_geometry(sc).spec
+    n = circumferential_divisions(spec)
+    ins = installation(sc, meshed_radii(spec))
+    assert ins.piles == ((-1.5, 0.0, polygon_radius(0.5, n), -12.0),
+                         (1.5, 0.0, polygon_radius(0.3, n), -8.0))
+    assert 0.5 < polygon_radius(0.5, n) < 0.5 * 1.06  # at most 5.4 % beyond (8 edges)
 
 
 def test_runaway_is_measured_against_the_smallest_diameter(small_pile_source, tmp_path):
