@@ -44,7 +44,6 @@ import numpy as np
 from pilegroup.errors import ScenarioError
 from pilegroup.fileio import write_text_atomic
 from pilegroup.geometry.adapter import ResolvedGeometry
-from pilegroup.geometry.plan import meshed_radii
 from pilegroup.model import Scenario
 from pilegroup.model.actions import ANTISYMMETRIC
 from pilegroup.solver import BiotProblem
@@ -104,7 +103,7 @@ class PileSections:
         self.planes = spec.cut_planes()
         self.source = spec.mirror_of()
         self.fraction = {i: spec.pile_fraction(i) for i in spec.kept_piles()}
-        self.forces = PlaneForces(sc, pb, list(self.fraction), meshed_radii(spec))
+        self.forces = PlaneForces(sc, pb, list(self.fraction), list(piles.radii))
         self.rows: dict[str, list[str]] = {"bending": [], "heads": [], "max": []}
         self._zero: dict[str, np.ndarray] = {}
 
