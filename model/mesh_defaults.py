@@ -24,7 +24,7 @@ study validated, docs/results.md):
   two elements thick, so thin layers set their own sizes);
 * with ``Q2Q1``: ``size_m = min(2 d, clear gap)``, twice every vertical length (the cap's at
   most its thickness), ``n_circ_min = 16`` and ``min_layer_divisions = 1`` (:data:`Q2_LENGTH`)
-  where the piles bend; with vertical actions only every length twice that again and 12 edges
+  where the piles bend; with vertical actions only every length twice that again and 8 edges
   around a pile (:data:`AXIAL_LENGTH`).
 
 Memory budget: when the estimated unknowns (:func:`estimated_unknowns`) of the part the run
@@ -62,10 +62,10 @@ N_CIRC = 28
 #: unknowns in its 160 m block), 2.4 % with the cells halved at the pile.
 Q2_LENGTH, N_CIRC_Q2 = 2.0, 16
 #: With vertical actions only nothing bends: Taylor–Hood's lengths times ``AXIAL_LENGTH`` and
-#: :data:`N_CIRC_AXIAL` edges around a pile. On ``pier667`` (docs/benchmarks.md, "Vertical
-#: actions only") settlement and largest moment within 0.1 and 0.3 % of 16 edges at lengths
-#: 1.5 times shorter; 8 edges keep the settlement but put the moment 21 % off.
-AXIAL_LENGTH, N_CIRC_AXIAL = 2.0, 12
+#: :data:`N_CIRC_AXIAL` edges around a pile (the polygon of the circle's area, its shaft's
+#: shear scaled to the circle's perimeter). On ``pier667`` (docs/benchmarks.md, "Vertical
+#: actions only") settlement and largest moment converge from these sizes (docs/results.md).
+AXIAL_LENGTH, N_CIRC_AXIAL = 2.0, 8
 Q2_LENGTHS = ("dz_surface_m", "dz_toe_m", "dz_max_m", "dz_max_deep_m", "dz_cap_m")
 #: Growth ratios in plan and in depth.
 GROWTH, DZ_GROWTH = 1.6, 1.4

@@ -29,8 +29,7 @@ class SoilMaterial:
     """Soil of one cell group, saturated below the water table.
 
     Attributes:
-        law: a constitutive law of ``pilegroup.constitutive`` (Mandel notation, tension
-            positive; stress in kPa).
+        law: a constitutive law of ``pilegroup.constitutive`` (Mandel notation, kPa, tension +).
         k_m_per_day: hydraulic conductivity k, m/day (Darcy: ``q = -(k/GAMMA_W) grad p``).
         porosity: n = e0/(1+e0), -; the storage is ``S = n / K_w`` (1/kPa).
         gamma_sat: saturated unit weight, kN/m^3; the buoyant weight ``gamma_sat - GAMMA_W``
@@ -41,8 +40,8 @@ class SoilMaterial:
         excess_ratio: excess pore pressure at the start as a fraction of the vertical
             effective stress it will carry once dissipated, in [0, 1) (under-consolidated).
         excess_kPa: excess pore pressure at the start, kPa, uniform over the group.
-        k_h_m_per_day: horizontal hydraulic conductivity, m/day (``None``: isotropic,
-            ``k_m_per_day`` then acts in every direction; else that one is the vertical).
+        k_h_m_per_day: horizontal conductivity, m/day (``None``: isotropic; else ``k_m_per_day``
+            is the vertical one).
     """
 
     law: ConstitutiveLaw
@@ -179,29 +178,31 @@ class InterfaceCoupling:
     """Piles and cap on their own displacement field, joined to the soil by an interface.
 
     Attributes:
-        laws: one interface law per group (constitutive protocol on the local jump
-            ``[opening, slip1, slip2]``): ``laws[j]`` for the pile shafts in soil layer ``j``
-            (0-based) and ``laws[L + j]`` for pile bases in layer ``j``; ``None`` where no facet
-            exists. ``L`` is the number of ``soil_layer_NN`` groups.
+        laws: one interface law per group (on the local jump ``[opening, slip1, slip2]``):
+            ``laws[j]`` for the shafts in soil layer ``j`` (0-based), ``laws[L + j]`` for the
+            bases in it (``L`` soil layers); ``None`` where no facet exists.
         traction0: ``traction0(x, z, m) -> (n, 3)`` initial local traction ``[sigma_n, tau1,
             tau2]`` (kPa, compression negative) of group ``m`` at the law's points ``x`` ((n, 3),
-            m), a stress linear in depth taken at the heights ``z`` (nodal quadrature: the
-            nodes' weighted heights; Gauss: the points'); ``None`` gives the in-situ state:
-            ``K0 sigma'_v`` on shafts, ``sigma'_v`` on bases, with the excess pore pressures at
-            the start (docs/model.md).
-        quadrature: where the law's state lives: ``"nodal"`` (the interface nodes, any
-            degree) or ``"gauss"`` (2 x 2 Gauss points per facet; Q1 displacements only;
-            docs/solver.md, "Interface quadrature").
+            m), a stress linear in depth taken at the heights ``z`` (nodal: the nodes' weighted
+            heights; Gauss: the points'); ``None``: the in-situ state (docs/model.md).
+        quadrature: where the law's state lives: ``"nodal"`` (the interface nodes) or
+            ``"gauss"`` (2 x 2 Gauss points per facet, Q1 only; docs/solver.md).
+        shaft_factor: factor on the shafts' shear tractions: the circle's circumference over
+            the meshed polygon's perimeter (``geometry.plan.perimeter_factor``), so that a
+            shaft carries the circle's friction force per unit length; 1 for a true circle.
     """
 
     laws: tuple[ConstitutiveLaw | None, ...]
     traction0: Callable[[np.ndarray, np.ndarray, int], np.ndarray] | None = None
     quadrature: Literal["nodal", "gauss"] = "nodal"
+    shaft_factor: float = 1.0
 
     def __post_init__(self) -> None:
         if self.quadrature not in ("nodal", "gauss"):
             raise SolverInputError(f"InterfaceCoupling.quadrature = {self.quadrature!r}; "
                                    "allowed: 'nodal', 'gauss'")
+        require_in_range("InterfaceCoupling.shaft_factor", self.shaft_factor, 0.5, 1.0, "-",
+                         error=SolverInputError)
         for m, law in enumerate(self.laws):
             if law is not None and not (hasattr(law, "update") and hasattr(law, "initial_state")):
                 raise SolverInputError(
@@ -437,9 +438,8 @@ class FaceAction:
 class RigidPlate:
     """A rigid, frictionless plate on a facet group, under force control.
 
-    The ``component`` of displacement is one unknown U on the group, and the resultant of the
-    reactions there equals ``force`` (kN, along +``component``; negative pushes down when the
-    component is z), times the load factor. Solved by bordering inside Newton.
+    The ``component`` of displacement is one unknown U on the group; the resultant of the
+    reactions there is ``force`` (kN, along +``component``) times the load factor (bordering).
     """
 
     facet: str

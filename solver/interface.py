@@ -7,13 +7,11 @@ the structure on the ``"+"`` side and the soil on the ``"-"`` side.
 
 Quadrature (``InterfaceCoupling.quadrature``), measured against each other in docs/solver.md:
 
-* ``"nodal"`` (:class:`NodalInterface`): the interface integrals use the Gauss-Lobatto-Legendre
-  rule whose points are the Lagrange nodes of the displacement element (``quadrature_rule =
-  "GLL"``; 2 x 2 points for Q1, 3 x 3 for Q2), so the interface law is evaluated at the
-  interface *nodes* and its state lives there. This is the classic remedy for the traction
-  oscillations of Gauss-integrated zero-thickness interfaces with stiff penalties (Schellekens &
-  de Borst 1993, IJNME 36:43-66); the coupling matrix between structure and soil dofs is then
-  node-to-node.
+* ``"nodal"`` (:class:`NodalInterface`): the Gauss-Lobatto-Legendre rule whose points are the
+  displacement element's nodes (2 x 2 for Q1, 3 x 3 for Q2), so the law and its state live at the
+  interface *nodes*: the classic remedy for the traction oscillations of Gauss-integrated
+  interfaces with stiff penalties (Schellekens & de Borst 1993, IJNME 36:43-66); the coupling
+  matrix between structure and soil dofs is node-to-node.
 * ``"gauss"`` (:class:`GaussInterface`, Q1 only): the law at the 2 x 2 Gauss points of every
   facet, the nodal forces and the consistent (facet-coupling) tangent summed over them; the
   same GLL forms carry the nodal forces, the tangent is added to the Newton matrix directly.
@@ -23,8 +21,11 @@ facets in soil layer ``j`` form group ``j``, pile bases in layer ``j`` form grou
 group has its own local frame (shaft: outward radial normal, vertical t1, circumferential t2;
 base: normal -z, t1 = x, t2 = y), its own law (the layer's parameters) and its own state. With the
 nodal weights ``W[i, m] = int_group phi_i dS`` the assembled terms are exact sums over groups:
-the traction and tangent Functions hold ``sum_m W[i, m] R^T t_m / A_i`` and
-``sum_m W[i, m] R^T D_m R / A_i`` with ``A_i = sum_m W[i, m]``.
+the traction and tangent Functions hold ``sum_m W[i, m] R^T C t_m / A_i`` and
+``sum_m W[i, m] R^T C D_m R / A_i`` with ``A_i = sum_m W[i, m]``; ``C = diag(c_n, c_s, c_s)``
+scales a shaft's tractions (``NodalGroup``): a pile is meshed as the polygon of its circle's
+area, whose perimeter is longer, and ``c_s`` (``InterfaceCoupling.shaft_factor``) gives the
+shaft the circle's friction force per unit length.
 
 Signs: the jump is ``[[u]] = u_soil - u_structure``; its local normal component is the opening
 (positive = gap), t1 is the soil moving up relative to the pile. The interface traction ``t``
@@ -120,8 +121,9 @@ class NodalInterface:
 
     def __init__(self, md: MeshData, split: BodySplit, V_struct: fem.FunctionSpace,
                  V_soil: fem.FunctionSpace, laws: Sequence[ConstitutiveLaw | None],
-                 traction0: Callable[[np.ndarray, np.ndarray, int], np.ndarray]) -> None:
-        self.split = split
+                 traction0: Callable[[np.ndarray, np.ndarray, int], np.ndarray],
+                 shaft_factor: float = 1.0) -> None:
+        self.split, self.shaft_factor = split, shaft_factor
         self.V_struct, self.V_soil = V_struct, V_soil
         L = split.n_layers
         if len(laws) != 2 * L:
@@ -163,8 +165,7 @@ class NodalInterface:
         self._jump_committed = np.zeros_like(self.jump.x.array)
         #: the jump when the laws were engaged (:meth:`activate`); outputs count from it
         self._jump_origin = np.zeros_like(self._jump_committed)
-        #: whether the laws act; inactive, the interface carries its committed traction only
-        #: (a structure not yet installed: ``BiotProblem(install_later=True)``)
+        #: whether the laws act (else only the committed traction: a structure not yet installed)
         self.active = True
         self._u_struct: fem.Function | None = None
         self._jump_form: fem.Form | None = None
@@ -221,6 +222,7 @@ class NodalInterface:
                 if nodes.size else None
             points.append(NodalGroup(nodes=nodes, R=R, w=self.W[nodes, m] / self.A[nodes],
                                      c_n=c_n[nodes] if m < L else np.ones(nodes.size),
+                                     c_s=self.shaft_factor if m < L else 1.0,
                                      law=law, state=state, trial=state))
         return points
 
@@ -334,8 +336,7 @@ class NodalInterface:
                 self.last_error = f"interface group {m}: {error}"
             g.trial = trial
             w = g.w
-            c = np.ones((nodes.size, 3))
-            c[:, 0] = g.c_n
+            c = np.column_stack([g.c_n, np.full((nodes.size, 2), g.c_s)])
             np.add.at(T, nodes, w[:, None] * np.einsum("nji,nj->ni", R, c * t_loc))
             np.add.at(D, nodes, w[:, None, None] * np.einsum("nki,nkl,nlj->nij", R,
                                                              c[:, :, None] * D_loc, R))
@@ -468,8 +469,8 @@ class NodalInterface:
     def material_points(self, m: int) -> InterfacePoints:
         """The committed material points of group ``m`` (here: its interface nodes).
 
-        Keys: ``weight`` (m^2, the point's integration weight; 0 on a rank that does not own
-        the point, so sums over ranks count every point once), ``x`` (m, coordinates),
+        Keys: ``weight`` (m^2, the point's integration weight times ``c_s``; 0 on a rank that
+        does not own the point, so sums over ranks count every point once), ``x`` (m),
         ``node`` (a soil node of the point, local numbering), ``state`` (the law state, or
         ``None`` without points), ``jump_local`` (m, ``[opening, slip1, slip2]``).
         """
@@ -477,7 +478,7 @@ class NodalInterface:
         nodes = g.nodes
         own = nodes < self.V_soil.dofmap.index_map.size_local
         jump = self.committed_jump()[nodes]
-        return InterfacePoints(weight=np.where(own, self.W[nodes, m], 0.0),
+        return InterfacePoints(weight=np.where(own, self.W[nodes, m] * g.c_s, 0.0),
                                x=self._soil_coords[nodes], node=nodes, state=g.state,
                                jump_local=np.einsum("nij,nj->ni", g.R, jump))
 

@@ -125,6 +125,7 @@ class GaussInterface(NodalInterface):
                     for f in (fn_s[sel], fn_t[sel])]
             groups.append(GaussGroup(fnodes=fn_s[sel], dofs_soil=dofs[0], dofs_struct=dofs[1],
                                      wJ=wJ[sel], x=x, R=R, law=law, state=state, trial=state,
+                                     c_s=self.shaft_factor if m < L else 1.0,
                                      K=np.zeros((nf, 12, 12))))
         return groups
 
@@ -156,9 +157,10 @@ class GaussInterface(NodalInterface):
             if error:
                 self.last_error = f"interface group {m}: {error}"
             g.trial = trial
-            t = np.einsum("nji,nj->ni", R, t_loc).reshape(nf, 4, 3) * g.wJ[:, :, None]
+            c = np.array([1.0, g.c_s, g.c_s])  # the shaft's shear on the circle's perimeter
+            t = np.einsum("nji,nj->ni", R, c * t_loc).reshape(nf, 4, 3) * g.wJ[:, :, None]
             np.add.at(F, g.fnodes, np.einsum("ga,fgi->fai", _NG, t))
-            D = np.einsum("nki,nkl,nlj->nij", R, D_loc, R).reshape(nf, 4, 3, 3)
+            D = np.einsum("nki,nkl,nlj->nij", R, c[:, None] * D_loc, R).reshape(nf, 4, 3, 3)
             g.K = np.einsum("ga,gb,fgij->faibj", _NG, _NG,
                             D * g.wJ[:, :, None, None]).reshape(nf, 12, 12)
         F = self._scatter_add(F)
@@ -210,8 +212,9 @@ class GaussInterface(NodalInterface):
         """
         g = self.groups[m]
         jump = self._at_points(g, self.committed_jump())
-        return InterfacePoints(weight=g.wJ.ravel(), x=g.x, node=np.repeat(g.fnodes[:, 0], 4),
-                               state=g.state, jump_local=np.einsum("nij,nj->ni", g.R, jump))
+        return InterfacePoints(weight=g.wJ.ravel() * g.c_s, x=g.x,
+                               node=np.repeat(g.fnodes[:, 0], 4), state=g.state,
+                               jump_local=np.einsum("nij,nj->ni", g.R, jump))
 
     def nodal_fields(self) -> dict[str, np.ndarray]:
         """Committed state per soil node: area-weighted averages of the Gauss-point values.

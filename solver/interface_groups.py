@@ -32,6 +32,8 @@ class NodalGroup:
     """The group's share of each node's interface area, ``W[i, m] / A_i``."""
     c_n: np.ndarray
     """Factor on the normal traction of a faceted shaft, ``|N_i| / A_i`` (1 on bases)."""
+    c_s: float
+    """Factor on the shear tractions: ``InterfaceCoupling.shaft_factor`` on shafts, 1 on bases."""
     law: Any
     """The layer's interface law (``constitutive.interface_law.PileSoilInterface``)."""
     state: LawState | None
@@ -58,6 +60,8 @@ class GaussGroup:
     """The layer's interface law."""
     state: LawState | None
     trial: LawState | None
+    c_s: float
+    """Factor on the shear tractions (as :attr:`NodalGroup.c_s`)."""
     K: np.ndarray
     """``(nf, 12, 12)`` facet tangents of the last evaluation, kPa m."""
 
@@ -66,7 +70,8 @@ class InterfacePoints(TypedDict):
     """The committed material points of one group, as the outputs read them."""
 
     weight: np.ndarray
-    """Integration weight of each point, m^2; 0 on a rank that does not own the point."""
+    """Integration weight of each point, m^2, times the group's ``c_s`` (a shaft's point stands
+    for its share of the circle's surface); 0 on a rank that does not own the point."""
     x: np.ndarray
     """Coordinates, m."""
     node: np.ndarray

@@ -163,7 +163,8 @@ class BiotProblem(MonolithicAlgebra):
         cls = GaussInterface if coupling.quadrature == "gauss" else NodalInterface
         lay = self.layout
         return cls(self.md, lay.split, lay.body("structure").V, lay.body("soil").V,
-                   list(coupling.laws), coupling.traction0 or self._interface_traction0)
+                   list(coupling.laws), coupling.traction0 or self._interface_traction0,
+                   coupling.shaft_factor)
 
     def _interface_traction0(self, x: np.ndarray, z: np.ndarray, m: int) -> np.ndarray:
         """In-situ local traction of interface group ``m`` at points ``x``, heights ``z`` (kPa)."""

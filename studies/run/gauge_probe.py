@@ -16,9 +16,10 @@ strain gauges") gives the conventions and why they were chosen:
   ranks up to rounding: no point search, no section split between ranks.
 * Pile settlement at a depth (and ``w0`` at depth 0): the section-mean vertical displacement,
   exact for Q1 from the layer means of ``u_z`` and ``d u_z / d z``.
-* ``A`` and ``U`` in Eqs. 1-2 are those of the meshed pile (its cross-section polygon: volume
-  over length, and shaft facet area over length), so that the field method reads the model's
-  pile, not a circle the mesh does not have; ``E`` is the structure's modulus.
+* ``A`` and ``U`` in Eqs. 1-2 are those the model's pile has: ``A`` its meshed section (volume
+  over length: the polygon of the circle's area) and ``U`` the perimeter its shaft friction acts
+  on (shaft facet area over length, times the interface's shaft factor: the circle's
+  circumference; the polygon's with tied piles); ``E`` is the structure's modulus.
 * The model's values: axial force from the pile stress (:meth:`PileProbe.axial_force`, force
   due to the loads), interface shear averaged over each gauge interval and pile-minus-soil
   displacement at each section (:meth:`PileProbe.interface_profile`); with tied piles the shear
@@ -83,7 +84,7 @@ class GaugeProbe:
         self.section = {i: self._section(i) for i in piles.fraction}
         for i, (A, U) in self.section.items():
             d = sc.piles.diameters[i - 1]
-            log.info("gauges, pile %d: meshed A = %.6g m^2 (circle %.6g), U = %.6g m (circle "
+            log.info("gauges, pile %d: A = %.6g m^2 (circle %.6g), U = %.6g m (circle "
                      "%.6g)", i, A, math.pi * d * d / 4, U, math.pi * d)
         self.rows: list[str] = []
         self._N0: dict[int, np.ndarray] = {}
@@ -132,7 +133,8 @@ class GaugeProbe:
         md = self.pb.md
         shafts = [n for n in md.facet_names if groups.shaft_of(n) is not None
                   and groups.shaft_of(n)[0] == i]
-        return vol / length / frac, facet_area(md, shafts, interior=True) / length / frac
+        factor = self.pb.interface.shaft_factor if self.pb.interface is not None else 1.0
+        return vol / length / frac, facet_area(md, shafts, interior=True) * factor / length / frac
 
     # ------------------------------------------------------------------ values
     def _pile_state(self) -> dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]]:

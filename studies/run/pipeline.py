@@ -1,9 +1,8 @@
 """A scenario as a coupled Biot problem, and the one way a scenario's stages are run.
 
 The one place that maps :class:`~pilegroup.model.Scenario` onto the solver's inputs. Piles and
-cap are elastic solids, tied to the soil (``interface.mode = "tied"``: one displacement field,
-the cap bottom bonded to the ground) or on their own field joined to the soil by each layer's
-interface law (``elastic``/``viscoplastic``; the cap then not in contact with the soil).
+cap are elastic solids, tied to the soil (``interface.mode = "tied"``: one field, the cap bonded
+to the ground) or on their own field joined to the soil by each layer's interface law.
 Boundaries (docs/model.md): bottom fixed, sides roller, ground surface (or the water table
 below it) drained; the rest impermeable. The cap load: a pressure on the cap top (pile heads).
 """
@@ -29,7 +28,7 @@ from pilegroup.errors import StepFailure
 from pilegroup.geometry import groups
 from pilegroup.geometry.adapter import ResolvedGeometry
 from pilegroup.geometry.meshdata import MeshData
-from pilegroup.geometry.plan import meshed_radii
+from pilegroup.geometry.plan import meshed_radii, shaft_factor
 from pilegroup.geometry.symmetry import PLANES
 from pilegroup.model import Scenario, Stage
 from pilegroup.model.analysis import InterfaceOptions
@@ -166,7 +165,7 @@ def build_problem(sc: Scenario, geo: ResolvedGeometry, md: MeshData, preset: str
                          band_layers=band_layers(h))
     return BiotProblem(md, materials, disc, displacement_bcs=dbcs,
                        pressure_bcs=drainage(sc), loads=loads, options=opts,
-                       interface=interface_coupling(sc, h),
+                       interface=interface_coupling(sc, h, shaft_factor(geo.spec)),
                        installation=installation(sc, meshed_radii(geo.spec)),
                        install_later=sc.installation_stage is not None, water_table=water_table(sc),
                        seepage=[(-d, u) for d, u in seepage(sc.site, sc.layers)])
@@ -273,14 +272,15 @@ def interface_law(sc: Scenario, j: int, mesh_size: float, base: bool = False
                            FADE_FACTOR / FADE_LENGTH_M) * lay.E)
 
 
-def interface_coupling(sc: Scenario, mesh_size: float) -> InterfaceCoupling | None:
-    """Pile/soil fields joined by the interface law (``mesh_size``: h at the piles), or None."""
+def interface_coupling(sc: Scenario, mesh_size: float, shaft: float = 1.0
+                       ) -> InterfaceCoupling | None:
+    """The interface coupling (h at the piles ``mesh_size``, ``shaft_factor`` ``shaft``) or None."""
     if sc.interface.mode == "tied":
         return None
     layers = range(len(sc.layers))
     laws = tuple(interface_law(sc, j, mesh_size) for j in layers) \
         + tuple(interface_law(sc, j, mesh_size, base=True) for j in layers)
-    return InterfaceCoupling(laws, quadrature=sc.interface.quadrature)
+    return InterfaceCoupling(laws, quadrature=sc.interface.quadrature, shaft_factor=shaft)
 
 
 def estimate_dofs(md: MeshData, element: str) -> int:

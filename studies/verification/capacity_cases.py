@@ -17,13 +17,14 @@ geostatic state, then a capacity stage that raises the head load until the pile 
   (the pile's density is the clay's), the toe adds ``N_c c_u A_b``.
 
 The soil is linear elastic and drained over the ramp (k = 1 m/day), so only the interface laws
-limit the resistance, and the capacity is ``Q_ult = k A_s + N_c c_u A_b`` with the
-meshed pile's areas (an N-gon of the circle's area, circumradius ``R``: ``A_s = 2 N R sin(pi /
-N) L``, ``A_b = pi r^2``). The case compares the run's ultimate capacity on the head's curve (the
-applied head load against the head settlement, as a load test reads it: the smaller of plunging
-and 10 % d settlement, ``summary.json``'s ``capacity.group`` of this one-pile foundation) with it;
-tolerance 5 %. The load step of the ramp (``max_load_kN / 200``, 0.6 % of ``Q_ult``) bounds the
-resolution of both criteria. The pile's own curve (``capacity.piles``) reads the head force from
+limit the resistance, and the capacity is ``Q_ult = k A_s + N_c c_u A_b`` with the circle's
+areas ``A_s = pi d L``, ``A_b = pi d^2 / 4`` (the meshed polygon has the circle's area, and the
+interface scales its shaft's shear by the circle's perimeter over the polygon's). The case
+compares the run's ultimate capacity on the head's curve (the applied head load against the head
+settlement, as a load test reads it: the smaller of plunging and 10 % d settlement,
+``summary.json``'s ``capacity.group`` of this one-pile foundation) with it; tolerance 5 %. The
+load step of the ramp (``max_load_kN / 200``, 0.6 % of ``Q_ult``) bounds the resolution of both
+criteria. The pile's own curve (``capacity.piles``) reads the head force from
 the stress of the pile's top element layer and so misses the shaft friction above that layer's
 mid-height (``tau_f`` times the perimeter times ``h``, 3.9 % of ``Q_ult`` at the fast size): it is
 reported, not compared.
@@ -41,7 +42,6 @@ from typing import Any
 
 from mpi4py import MPI
 
-from pilegroup.geometry.plan import polygon_radius
 from pilegroup.model.units import GAMMA_WATER, G
 from pilegroup.studies.results.tables import CAPACITY_CSV
 from pilegroup.studies.verification.common import run_pipeline, world
@@ -59,14 +59,13 @@ TAU_F = 2.0 * C_U / math.sqrt(3.0)
 OVERLOAD, STEPS = 1.25, 200
 
 
-def capacity_reference(n_sides: int) -> dict[str, float]:
-    """The closed-form capacity (kN) of the pile meshed as an ``n_sides``-gon.
+def capacity_reference() -> dict[str, float]:
+    """The closed-form capacity (kN) of the circular pile.
 
-    The polygon has the circle's area (:func:`~pilegroup.geometry.plan.polygon_radius`).
+    The meshed pile, a polygon, has the circle's area, and the interface scales its shaft's
+    shear by the circle's perimeter over the polygon's (``InterfaceCoupling.shaft_factor``).
     """
-    r = polygon_radius(D / 2.0, n_sides)
-    perimeter = 2.0 * n_sides * r * math.sin(math.pi / n_sides)
-    base = 0.5 * n_sides * r * r * math.sin(2.0 * math.pi / n_sides)
+    perimeter, base = math.pi * D, math.pi * D * D / 4.0
     shaft = TAU_F * perimeter * L
     toe = N_C * C_U * base
     return {"shaft_kN": shaft, "toe_kN": toe, "ultimate_kN": shaft + toe,
@@ -76,7 +75,7 @@ def capacity_reference(n_sides: int) -> dict[str, float]:
 def pile_capacity_scenario(size: str = "fast") -> dict[str, Any]:
     """The scenario of the case as a TOML document (dict)."""
     h = {"fast": 0.25, "bench": 0.125}[size]
-    max_load = OVERLOAD * capacity_reference(16)["ultimate_kN"]
+    max_load = OVERLOAD * capacity_reference()["ultimate_kN"]
     clay = {"name": "clay", "gamma_kN_per_m3": GAMMA, "E_MPa": 20.0, "nu": 0.3,
             "phi_deg": 0.0, "c_kPa": C_U, "k_m_per_day": 1.0, "e0": 0.8,
             "interface": {"delta_deg": 10.0, "K": 1.0e4, "n": 0.0, "R_f": 0.0,
@@ -111,7 +110,7 @@ def pile_capacity(size: str = "fast", comm: MPI.Comm | None = None) -> CaseResul
     comm = comm or world()
     t0 = time.perf_counter()
     _, n = run_pipeline(pile_capacity_scenario(size), comm, (CAPACITY_CSV,))
-    ref = capacity_reference(int(n["mesh"]["circumferential_divisions"]))
+    ref = capacity_reference()
     cap = n["summary"]["capacity"]
     head, pile = cap["group"], cap["piles"][0]
     got = head["ultimate_kN"]
@@ -121,10 +120,9 @@ def pile_capacity(size: str = "fast", comm: MPI.Comm | None = None) -> CaseResul
         "pile-capacity", err, tol, bool(err <= tol), time.perf_counter() - t0, n["dofs"],
         n["newton"], n["steps"],
         reference="k A_s + N_c c_u A_b: shaft strength 2 c / sqrt 3 (default Eq. 15, phi = 0), "
-                  "toe N_c = 9 (Skempton 1951), meshed N-gon areas (the circle's area)",
+                  "toe N_c = 9 (Skempton 1951), the circle's areas",
         details={**ref, "ultimate_kN_run": got, "governing": head["governing"],
                  "plunging_kN": head["plunging"]["load_kN"],
                  "settlement_10pct_d_kN": head["settlement_10pct_d"]["load_kN"],
                  "pile_curve_ultimate_kN": pile["ultimate_kN"], "end": cap["end"],
-                 "circle_ultimate_kN": TAU_F * math.pi * D * L + N_C * C_U * math.pi * D * D / 4,
                  "n_sides": int(n["mesh"]["circumferential_divisions"]), "ranks": comm.size})

@@ -27,6 +27,7 @@ from pilegroup.geometry import groups
 from pilegroup.geometry.box import build_box
 from pilegroup.geometry.convert import build_mesh
 from pilegroup.geometry.meshdata import MeshData
+from pilegroup.geometry.plan import shaft_factor
 from pilegroup.geometry.spec import BlockSpec, GeometrySpec, LayerSpec, MeshSizing, PileSpec
 from pilegroup.model import scenario_from_dict
 from pilegroup.solver import (
@@ -115,8 +116,11 @@ def load_then_consolidate(t_end: float) -> list[SolverStage]:
 
 
 def single_pile_mesh(comm: MPI.Comm, layers: tuple[tuple[str, float | None], ...], length: float,
-                     size: str) -> MeshData:
-    """A single pile (d = 1 m, head on the ground, no cap) in a small block, by gmsh."""
+                     size: str) -> tuple[MeshData, float]:
+    """A single pile (d = 1 m, head on the ground, no cap) in a small block, by gmsh.
+
+    Returns the mesh and its pile's ``InterfaceCoupling.shaft_factor``.
+    """
     h = {"fast": 0.5, "bench": 0.25}[size]
     spec = GeometrySpec(
         block=BlockSpec(6.0, 6.0, length + 3.0),
@@ -126,7 +130,7 @@ def single_pile_mesh(comm: MPI.Comm, layers: tuple[tuple[str, float | None], ...
         sizing=MeshSizing(h_pile=h, n_circ_min=8 if size == "fast" else 16,
                           near_field_margin=1.0, h_far=1.5, dz_surface=h, dz_toe=h,
                           dz_max=2 * h, dz_max_deep=1.5, dz_growth=1.3))
-    return build_mesh(spec, comm, cache_dir=False)
+    return build_mesh(spec, comm, cache_dir=False), shaft_factor(spec)
 
 
 def two_blocks(comm: MPI.Comm) -> MeshData:

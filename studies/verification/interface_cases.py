@@ -66,10 +66,11 @@ __all__ = ["ShaftTest", "interface_patch", "shaft_capacity", "tied_limit"]
 class ShaftTest:
     """Data of the shaft-capacity case.
 
-    Pile length ``L`` and head push (m), shaft strength ``c`` (kPa) and ``phi`` (deg), the
-    soil's ``K0`` and saturated unit weight ``gamma`` (kN/m^3).
+    Pile diameter ``d``, length ``L`` and head push (m), shaft strength ``c`` (kPa) and ``phi``
+    (deg), the soil's ``K0`` and saturated unit weight ``gamma`` (kN/m^3).
     """
 
+    d: float = 1.0  # single_pile_mesh's
     L: float = 4.0
     push: float = 0.03
     c: float = 10.0
@@ -127,8 +128,8 @@ def _shaft_details(pb: BiotProblem, shaft: PileSoilInterface, rec: _ShaftRecorde
     pts = pb.interface.material_points(0)
     own = pts["weight"] > 0.0
     area = allsum(comm, float(pts["weight"].sum()))
-    perim = area / test.L
-    Q_ref = test.closed_form(perim)
+    perim = area / test.L  # the circle's, by the interface's shaft factor
+    Q_ref = test.closed_form(math.pi * test.d)
     Q_act = test.capacity(pb.interface, comm)
     F = shaft.yield_function(pts["state"]["traction"][own]) if pts["state"] is not None \
         else np.zeros(0)
@@ -170,9 +171,10 @@ def shaft_capacity(size: str = "fast", pair: str = "Q1Q1", preset: str = "direct
     ``1 kPa/m x 3 cm x A_b`` = 0.02 kN.
 
     Reference (closed form): ``Q_s = sum_shaft tau_f A``. With the in-situ normal stress, ``Q_s0
-    = P_h (k L + 3 alpha K0 gamma' L^2 / 2)`` (``P_h`` the meshed polygon perimeter, ``gamma' =
-    gamma_sat - gamma_w``; the nodal weights, and the 2 x 2 Gauss rule with
-    ``quadrature="gauss"``, make the sum exact for the linear in-situ ``sigma_n(z)``). Pushing
+    = pi d (k L + 3 alpha K0 gamma' L^2 / 2)`` (``gamma' = gamma_sat - gamma_w``; the shaft's
+    shear is scaled by the circle's perimeter over the polygon's, and the nodal weights, or the
+    2 x 2 Gauss rule with ``quadrature="gauss"``, make the sum exact for the linear in-situ
+    ``sigma_n(z)``). Pushing
     the pile changes sigma_n at the shaft's end rings (elastic soil, the shear traction stops
     abruptly at the ground surface and at the toe): measured -1.1 -> -32 kPa at the head ring,
     -25 -> -13 kPa at the toe ring, so the plateau is 5.0 % above ``Q_s0``. The error is
@@ -186,7 +188,7 @@ def shaft_capacity(size: str = "fast", pair: str = "Q1Q1", preset: str = "direct
     comm = comm or world()
     t0 = time.perf_counter()
     test = ShaftTest()
-    md = single_pile_mesh(comm, (("soil", None),), test.L, size)
+    md, shaft_factor = single_pile_mesh(comm, (("soil", None),), test.L, size)
     soil = SoilMaterial(LinearElastic(2.0e4, 0.3), 1e-3, 0.4, gamma_sat=test.gamma, K0=test.K0)
     shaft = PileSoilInterface(K=1.0e5, n=0.0, R_f=0.0, c=test.c, phi_deg=test.phi, eta=1e-2,
                               k_normal=4.0e6 * k_normal_factor, delta_deg=30.0, viscous=True,
@@ -195,7 +197,8 @@ def shaft_capacity(size: str = "fast", pair: str = "Q1Q1", preset: str = "direct
                              k_normal=1.0, delta_deg=30.0, viscous=False)
     pb = structure_problem(
         md, {groups.soil_layer(1): soil, groups.pile(1): ElasticSolid(3.0e7, 0.2)}, pair, preset,
-        f"shaftcap_{pair}_", InterfaceCoupling((shaft, base), quadrature=quadrature),
+        f"shaftcap_{pair}_",
+        InterfaceCoupling((shaft, base), quadrature=quadrature, shaft_factor=shaft_factor),
         box_bcs((0, 1, 2), DisplacementBC(groups.head(1), 2, -test.push)))
     rec = _ShaftRecorder(test, comm)
     ts = StepControl(dt0=0.05, dt_max=0.05, dt_min=1e-4, milestones=TENTHS)
@@ -443,7 +446,7 @@ def tied_limit(size: str = "fast", pair: str = "Q1Q1", preset: str = "direct",
     comm = comm or world()
     t0 = time.perf_counter()
     L, Q = 4.0, 300.0
-    md = single_pile_mesh(comm, (("upper", 2.0), ("lower", None)), L, size)
+    md, shaft_factor = single_pile_mesh(comm, (("upper", 2.0), ("lower", None)), L, size)
     mats = {
         groups.soil_layer(1): SoilMaterial(LinearElastic(5.0e3, 0.3), 1e-3, 0.5, 17.0, K0=0.7),
         groups.soil_layer(2): SoilMaterial(LinearElastic(2.0e4, 0.3), 1e-3, 0.4, 19.0, K0=0.6),
@@ -453,7 +456,7 @@ def tied_limit(size: str = "fast", pair: str = "Q1Q1", preset: str = "direct",
     q = Q / facet_area(md, [groups.head(1)])
     out = {mode: _tied_run(md, mats, coupling, f"tied_{mode}_{pair}_", pair, preset, q, comm)
            for mode, coupling in (("tied", None), ("interface", InterfaceCoupling(
-               (stiff,) * 4, quadrature=quadrature)))}
+               (stiff,) * 4, quadrature=quadrature, shaft_factor=shaft_factor)))}
     s_t, s_i = out["tied"]["settlement_m"], out["interface"]["settlement_m"]
     err = abs(s_i - s_t) / abs(s_t)
     tol = 0.01

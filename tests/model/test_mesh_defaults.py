@@ -19,8 +19,8 @@ PIER_SIZES = {"size_m": 1.0, "far_field_size_m": 16.0, "growth": 1.6, "n_circ_mi
               "dz_surface_m": 1.0, "dz_toe_m": 1.0, "dz_max_m": 6.0, "dz_max_deep_m": 15.0,
               "dz_growth": 1.4, "dz_cap_m": 1.5, "min_layer_divisions": 2}
 #: Its default: Q2Q1 at the axial sizes (every length 4 times the trilinear one, the size next
-#: to the piles from the clear gap of 1.5 m, the cap's at most its 2.5 m; 12 edges).
-PIER_AXIAL = {"size_m": 3.0, "far_field_size_m": 32.0, "growth": 1.6, "n_circ_min": 12,
+#: to the piles from the clear gap of 1.5 m, the cap's at most its 2.5 m; 8 edges).
+PIER_AXIAL = {"size_m": 3.0, "far_field_size_m": 32.0, "growth": 1.6, "n_circ_min": 8,
               "dz_surface_m": 4.0, "dz_toe_m": 4.0, "dz_max_m": 24.0, "dz_max_deep_m": 60.0,
               "dz_growth": 1.4, "dz_cap_m": 2.5, "min_layer_divisions": 1}
 
@@ -75,13 +75,13 @@ def test_an_explicit_q1q1_gets_the_validated_trilinear_mesh():
     assert sc.numerics.element_reason == "numerics.element"
 
 
-def test_vertical_actions_take_twice_the_bending_lengths_and_12_edges():
+def test_vertical_actions_take_twice_the_bending_lengths_and_8_edges():
     """The same 2 x 2 group with and without a horizontal force: Q2Q1 both; without it every
-    automatic length twice the bending one and 12 edges around a pile instead of 16."""
+    automatic length twice the bending one and 8 edges around a pile instead of 16."""
     axial = scenario_from_dict(group(2, 1.2)).numerics
     bending = scenario_from_dict(group(2, 1.2, lateral=True)).numerics
     assert axial.element == bending.element == "Q2Q1"
-    assert (axial.mesh.n_circ_min, bending.mesh.n_circ_min) == (12, 16)
+    assert (axial.mesh.n_circ_min, bending.mesh.n_circ_min) == (8, 16)
     for k in ("size_m", "far_field_size_m", "dz_surface_m", "dz_toe_m", "dz_max_m",
               "dz_max_deep_m"):
         assert getattr(axial.mesh, k) == pytest.approx(2.0 * getattr(bending.mesh, k)), k

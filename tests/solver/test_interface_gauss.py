@@ -326,6 +326,12 @@ def test_gauss_needs_q1_and_a_valid_name():
         InterfaceCoupling((None,), quadrature="lobatto")
 
 
+@pytest.mark.parametrize("factor", [0.3, 1.2, float("nan")])
+def test_a_shaft_factor_off_a_circle_over_its_polygon_is_refused(factor):
+    with pytest.raises(SolverInputError, match=r"InterfaceCoupling\.shaft_factor = .*must"):
+        InterfaceCoupling((None,), shaft_factor=factor)
+
+
 @pytest.mark.mpi
 def test_interface_gauss_under_mpirun(rerun_under_mpirun):
     rerun_under_mpirun(__file__, timeout=600)  # a dead rank ends the test, never hangs CI

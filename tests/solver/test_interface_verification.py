@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from pilegroup.geometry.plan import perimeter_factor
 from pilegroup.studies import verification as ver
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -31,12 +32,13 @@ def test_shaft_capacity(quadrature):
     assert d["shaft_points_at_yield"] == d["shaft_points"] > 0
     loads = [row["head_load_kN"] for row in d["rows"]]
     assert np.allclose(loads[-3:], d["capacity_actual_sigma_n_kN"], rtol=2e-4)
-    # in-situ tractions lump exactly onto the closed form P_h (k L + 3 alpha K0 gamma' L^2/2)
+    # in-situ tractions lump exactly onto the closed form pi d (k L + 3 alpha K0 gamma' L^2/2)
     assert d["err_insitu"] < 1e-12
-    # the polygonal perimeter (8 sides, the circle's area: R^2 = pi / 4 / (4 sin(pi / 4)) for
-    # d = 1 m) is used, not pi d
+    # the shaft's points stand for the circle's surface: the 8-gon of the circle's area (R^2 =
+    # pi / 4 / (4 sin(pi / 4)) for d = 1 m, perimeter 16 R sin(pi / 8)) times the shaft factor
     big = np.sqrt(np.pi / 4 / (4 * np.sin(np.pi / 4)))
-    assert d["perimeter_m"] == pytest.approx(16 * big * np.sin(np.pi / 8), rel=1e-12)
+    assert 16 * big * np.sin(np.pi / 8) * perimeter_factor(8) == pytest.approx(np.pi, rel=1e-14)
+    assert d["perimeter_m"] == pytest.approx(np.pi, rel=1e-12)
 
 
 @pytest.mark.parametrize("quadrature", QUADRATURES)
