@@ -1,28 +1,31 @@
-"""A rough, conservative count of the cells a scenario's mesh will have, before any meshing.
+"""A count of the cells a scenario's mesh will have, before any meshing.
 
 The mesh is plan quads extruded down through the layers (docs/geometry.md), so the count is
-(plan quads) x (element layers), each estimated from the sizing keys of ``numerics.mesh``:
+(plan quads) x (element layers), each from the sizing keys of ``numerics.mesh`` following the
+mesher:
 
-* plan: around each pile (diameter ``d``) the element size grows from ``h_eff = min(size_m,
-  pi d / n_circ_min)`` by the factor ``growth`` per element up to ``far_field_size_m``
-  (``h_far``); integrating ``1 / size^2`` over that graded annulus gives ``2 pi R / a
-  (1/h_eff - 1/h_far) + 2 pi / a^2 (ln(h_far/h_eff) + h_eff/h_far - 1)`` quads per pile
-  (``a = growth - 1``), and the rest of the block holds ``area / h_far^2``;
-* vertical: the same graded integral of ``1 / dz`` from the ground surface and the pile toes
-  (every distinct toe level), plus ``min_layer_divisions + 1`` per slab (rounding up per
-  layer, toe cut, water table and cap).
+* plan (:func:`plan_quads`): the structured region (the cap, or the piles' bounding box plus a
+  margin) is a grid of pile cells, each an o-grid of ``N`` edges around its pile and radial
+  edges growing from ``size_m``; the far field around it is graded from the region's edge by
+  ``growth`` up to ``far_field_size_m`` (the integral of ``1 / size^2`` over that band, times
+  :data:`FAR_FIELD_FILL`);
+* vertical (:func:`element_layers`): the mesher's rule for the soil column's slabs (cut at the
+  layer boundaries, toes and water table) and the cap's.
 
-The product times :data:`SAFETY` is above the real cell count of the whole model by 1.3-3x
-for the bundled scenarios and the benchmark meshes (h = 0.1-1 m; ``tests/model/test_fuzz.py``
-checks the bound on meshes); a symmetry-reduced model has a half or a quarter of those cells.
-:data:`MAX_CELLS` is the largest estimate a scenario may have.
+On the bundled scenarios' meshes and groups up to 6 x 6 the layers are exact and the plan
+quads 0.83-1.05 times the meshed count (docs/benchmarks.md, "Memory estimate before meshing");
+:func:`estimated_cells` adds :data:`SAFETY` for the memory check (``tests/model/test_fuzz.py``
+checks that it bounds the meshed count); a symmetry-reduced model has a half or a quarter of
+those cells. :data:`MAX_CELLS` is the largest estimate a scenario may have.
 """
 
 from __future__ import annotations
 
+import itertools
 import math
-from collections import Counter
 from typing import Protocol
+
+import numpy as np
 
 from pilegroup.model.analysis import Numerics
 from pilegroup.model.piles import Piles
@@ -50,8 +53,14 @@ class EstimatedScenario(Protocol):
 #: Largest estimated cell count accepted: ~50 GB of memory for a Q1-Q1 Biot system with a
 #: direct solver, far beyond the 2-core machines the tool targets.
 MAX_CELLS = 50_000_000
-#: Factor on the graded-mesh integral (the quads are not the ideal sizes everywhere).
+#: Factor on the estimated cells: an upper bound for the memory check.
 SAFETY = 2.0
+#: The o-grid's radial growth and its radial edges inside a pile (geometry/plan.py), and the
+#: structured margin around the piles without a cap (geometry/spec.py, ``near_field_margin``).
+OGRID_GROWTH, OGRID_INSIDE, NEAR_FIELD_MARGIN = 1.35, 2, 1.5
+#: Unstructured quads per ideal quad of the far field's size field (with it the plan quads of
+#: the bundled scenarios' meshes and of groups up to 6 x 6 are estimated at 0.83-1.05 times).
+FAR_FIELD_FILL = 2.0
 #: Vertices per hexahedron of the graded meshes (1.11 for the pier, more for small meshes).
 VERTICES_PER_CELL = 1.15
 #: Unknowns per vertex: 3 displacements (Q2: ~8 nodes per vertex) and 1 pressure.
@@ -71,46 +80,78 @@ def graded_count(length: float, start: float, cap: float, growth: float) -> floa
 def plan_quads(sc: EstimatedScenario) -> float:
     """Estimated plan quads of the whole block (no symmetry reduction).
 
-    Every pile circle has the same number of edges, set by the thickest pile (the o-grid cells
-    share their sides): a thinner pile's first element is ``h_eff`` scaled by its diameter
-    over the largest one.
+    The structured region (the cap, or the piles' bounding box widened by the mesher's margin)
+    is a grid of pile cells, each an o-grid of ``N`` edges around its pile (``N`` from the
+    thickest pile: ``max(n_circ_min, 4 ceil(pi d / 4 size_m))``): ``(N/4)^2 + N m_in`` quads
+    inside the pile and ``N m_out`` outside, ``m_out`` radial edges from ``size_m`` at the
+    pile growing to the cell side's edge. The far field around it is graded from that edge by
+    ``growth`` up to ``far_field_size_m``: the integral of ``1 / size^2`` over the band, times
+    :data:`FAR_FIELD_FILL` (an unstructured quad mesh has more quads than its size field).
     """
     m = sc.numerics.mesh
-    h_far = max(m.far_field_size_m, m.size_m)
-    a = m.growth - 1.0
-    d_max = max(sc.piles.diameters)
-    total = 0.0
-    for d, count in Counter(sc.piles.diameters).items():
-        h = min(m.size_m, math.pi * d / m.n_circ_min, h_far)
-        if d < d_max:
-            h = min(h, m.size_m * d / d_max)
-        per_pile = (math.pi * d / a * (1.0 / h - 1.0 / h_far)
-                    + 2.0 * math.pi / a ** 2 * (math.log(h_far / h) + h / h_far - 1.0))
-        total += count * per_pile
-    return total + sc.site.size_x_m * sc.site.size_y_m / h_far ** 2
+    h, h_far = m.size_m, max(m.far_field_size_m, m.size_m)
+    n = max(m.n_circ_min, 4 * math.ceil(math.pi * max(sc.piles.diameters) / (4.0 * h) - 1e-9))
+    xs = {round(x, 6) for x, _ in sc.piles.xy}
+    ys = {round(y, 6) for _, y in sc.piles.xy}
+    if sc.cap is not None:
+        w, b = sc.cap.size_x_m, sc.cap.size_y_m
+    else:
+        pad = max(sc.piles.diameters) + 2.0 * NEAR_FIELD_MARGIN
+        w, b = max(xs) - min(xs) + pad, max(ys) - min(ys) + pad
+    cw, cb = w / len(xs), b / len(ys)
+    side = min(cw, cb) / (n / 4)
+    reach = max(0.5 * math.hypot(cw, cb) - 0.5 * min(sc.piles.diameters), h)
+    m_out = math.ceil(graded_count(reach, h, max(side, h), OGRID_GROWTH) - 1e-9)
+    cells = len(xs) * len(ys) * ((n / 4) ** 2 + n * (OGRID_INSIDE + m_out))
+    return cells + FAR_FIELD_FILL * _far_field_quads(sc, 2.0 * (w + b), w * b, min(side, h_far))
+
+
+def _far_field_quads(sc: EstimatedScenario, perimeter: float, inner: float, edge: float) -> float:
+    """Quads of the block outside a region of ``perimeter`` and area ``inner`` (m, m^2).
+
+    Sizes ``edge + (growth - 1) t`` at the distance ``t`` from the region, up to
+    ``far_field_size_m``, over the block's area.
+    """
+    m = sc.numerics.mesh
+    h_far, a = max(m.far_field_size_m, m.size_m), m.growth - 1.0
+    avail = max(sc.site.size_x_m * sc.site.size_y_m - inner, 0.0)
+    t = (h_far - edge) / a  # where the size reaches h_far
+    if perimeter * t + math.pi * t * t > avail:  # the band fills the block first
+        t = (math.sqrt(perimeter ** 2 + 4.0 * math.pi * avail) - perimeter) / (2.0 * math.pi)
+    u = edge + a * t
+    band = (perimeter * (1.0 / edge - 1.0 / u)
+            + 2.0 * math.pi / a * (math.log(u / edge) + edge / u - 1.0)) / a
+    return band + max(avail - perimeter * t - math.pi * t * t, 0.0) / h_far ** 2
 
 
 def element_layers(sc: EstimatedScenario) -> float:
-    """Estimated element layers of the extrusion (soil and cap).
+    """Element layers of the extrusion (soil and cap), by the mesher's rule (docs/geometry.md).
 
-    The column is graded from the ground surface and from every distinct toe level: each
-    stretch between two of these levels is refined from both of its ends.
+    The soil column is cut at every layer boundary, pile toe and the water table; a slab has
+    ``max(min_layer_divisions, ceil(int 1 / dz))`` elements, ``dz(z)`` growing by
+    ``dz_growth`` from the ground surface (``dz_surface_m``) and the toes (``dz_toe_m``) up to
+    ``dz_max_m`` above the deepest toe and ``dz_max_deep_m`` below it; the cap's slabs (cut at
+    the pile tops) ``ceil(thickness / dz_cap_m)``.
     """
     m = sc.numerics.mesh
     depth = sc.site.depth_m
     toes = sorted(set(sc.piles.lengths))
-    n = 0.0
-    top, first = 0.0, m.dz_surface_m
-    for toe in toes:
-        n += (graded_count((toe - top) / 2, first, m.dz_max_m, m.dz_growth)
-              + graded_count((toe - top) / 2, m.dz_toe_m, m.dz_max_m, m.dz_growth))
-        top, first = toe, m.dz_toe_m
-    n += graded_count(depth - top, m.dz_toe_m, m.dz_max_deep_m, m.dz_growth)
-    slabs = len(sc.layers) + len(toes) + (sc.site.water_table_depth_m > 0.0)  # its surface
+    bottoms = list(itertools.accumulate(lay.thickness_m or depth for lay in sc.layers))
+    cuts = sorted({0.0, depth, *toes, *(d for d in bottoms if d < depth),
+                   *([sc.site.water_table_depth_m] if sc.site.water_table_depth_m > 0 else [])})
+    foci = [(0.0, m.dz_surface_m)] + [(t, m.dz_toe_m) for t in toes]
+    n = 0
+    for top, bot in itertools.pairwise(cuts):
+        d = np.linspace(top, bot, 401)
+        dz = np.min([d0 + (m.dz_growth - 1.0) * np.abs(d - z0) for z0, d0 in foci], axis=0)
+        dz = np.minimum(dz, np.where(d <= toes[-1], m.dz_max_m, m.dz_max_deep_m))
+        n += max(m.min_layer_divisions, math.ceil(np.trapezoid(1.0 / dz, d) - 1e-6))
     if sc.cap is not None:
-        n += sc.cap.thickness_m / m.dz_cap_m
-        slabs += 2
-    return n + slabs * (m.min_layer_divisions + 1)
+        t = sc.cap.thickness_m
+        levels = sorted({0.0, t, sc.piles.embedment_m})
+        n += sum(math.ceil((hi - lo) / m.dz_cap_m - 1e-6) for lo, hi in itertools.pairwise(levels)
+                 if hi - lo > 1e-9 * t)
+    return float(n)
 
 
 def estimated_cells(sc: EstimatedScenario) -> float:

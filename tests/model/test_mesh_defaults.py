@@ -88,12 +88,21 @@ def test_vertical_actions_take_twice_the_bending_lengths_and_8_edges():
     assert axial.mesh.dz_cap_m == bending.mesh.dz_cap_m == 2.0  # the cap's thickness
 
 
-def test_where_q2q1_exceeds_the_budget_vertical_actions_take_q1q1_without_a_warning():
+def test_the_whole_pier_takes_q2q1_at_the_axial_sizes():
+    """About 240,000 unknowns (four quarters of 59,400 meshed) fit the budget."""
     data = doc()
-    data.setdefault("numerics", {})["symmetry"] = "none"  # the whole pier
+    data.setdefault("numerics", {})["symmetry"] = "none"
+    sc = scenario_from_dict(data)
+    assert sc.numerics.element == "Q2Q1" and sc.numerics.mesh.given() == PIER_AXIAL | {"scale": 1.0}
+    assert 200_000 < estimated_unknowns(sc) < 300_000
+
+
+def test_where_q2q1_exceeds_the_budget_vertical_actions_take_q1q1_without_a_warning():
+    data = group(8, 1.0)
+    data["numerics"] = {"symmetry": "none"}  # the whole block of an 8 x 8 group
     sc = scenario_from_dict(data)
     assert sc.numerics.element == "Q1Q1" and "memory budget" in sc.numerics.element_reason
-    assert sc.numerics.mesh.given() == PIER_SIZES | {"scale": 1.0}
+    assert estimated_unknowns(sc) <= UNKNOWN_BUDGET
     assert sc.discretisation_warning() is None  # nothing bends
 
 

@@ -267,7 +267,8 @@ CATALOGUE: dict[str, tuple[str, ...]] = {
     "solver/inputs.py::SoilMaterial.__post_init__": (G,) * 9,
     "solver/inputs.py::ElasticSolid.__post_init__": (G,),
     "solver/inputs.py::InstallationExcess.__post_init__": (G,) * 3,
-    "solver/inputs.py::InterfaceCoupling.__post_init__": (G, G),
+    # quadrature, shaft factor (the mesher's polygon: always in range), laws
+    "solver/inputs.py::InterfaceCoupling.__post_init__": (G, G, G),
     "solver/inputs.py::Discretisation.__post_init__": (G, G),
     "solver/inputs.py::NewtonOptions.__post_init__": (G,),
     "solver/inputs.py::SolverOptions.__post_init__": (G,),
