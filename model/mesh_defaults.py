@@ -8,7 +8,7 @@ Q2Q1 model fits :data:`UNKNOWN_BUDGET` at its automatic sizes; else the stabilis
 pair ``Q1Q1``. Trilinear hexahedra are too stiff next to piles: they lock where the piles bend
 (the scenario's ``locking_reason``: ``verify lateral-single-pile`` 18-44 % too stiff; a capacity
 stage drives a plastic soil to isochoric flow), and under vertical load alone ``pier667``
-settles 3.1 % less than on Q2Q1 (docs/benchmarks.md, "Vertical actions only").
+settles 2.9 % less than on Q2Q1 (docs/benchmarks.md, "Vertical actions only").
 
 Mesh sizes (``numerics.mesh``), for the largest pile diameter ``d``, the longest pile ``L``, the
 block's smaller plan side ``W`` and depth ``D`` (the rules reproduce the sizes the Pier 667 mesh
