@@ -98,6 +98,8 @@ def plan_quads(sc: EstimatedScenario) -> float:
     else:
         pad = max(sc.piles.diameters) + 2.0 * NEAR_FIELD_MARGIN
         w, b = max(xs) - min(xs) + pad, max(ys) - min(ys) + pad
+    # within the block (a layout off the block is refused by the scenario's own checks)
+    w, b = min(w, sc.site.size_x_m), min(b, sc.site.size_y_m)
     cw, cb = w / len(xs), b / len(ys)
     side = min(cw, cb) / (n / 4)
     reach = max(0.5 * math.hypot(cw, cb) - 0.5 * min(sc.piles.diameters), h)
@@ -117,7 +119,7 @@ def _far_field_quads(sc: EstimatedScenario, perimeter: float, inner: float, edge
     avail = max(sc.site.size_x_m * sc.site.size_y_m - inner, 0.0)
     t = (h_far - edge) / a  # where the size reaches h_far
     if perimeter * t + math.pi * t * t > avail:  # the band fills the block first
-        t = (math.sqrt(perimeter ** 2 + 4.0 * math.pi * avail) - perimeter) / (2.0 * math.pi)
+        t = 2.0 * avail / (perimeter + math.hypot(perimeter, 2.0 * math.sqrt(math.pi * avail)))
     u = edge + a * t
     band = (perimeter * (1.0 / edge - 1.0 / u)
             + 2.0 * math.pi / a * (math.log(u / edge) + edge / u - 1.0)) / a
