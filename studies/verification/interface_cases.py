@@ -88,7 +88,7 @@ class ShaftTest:
         return allsum(comm, float(np.sum(pts["weight"] * (k - 3.0 * alpha * sn))))
 
     def closed_form(self, perimeter: float) -> float:
-        """``Q_s0 = P_h (k L + 3 alpha K0 gamma' L^2 / 2)`` (kN) for the in-situ sigma_n."""
+        """``Q_s0 = P (k L + 3 alpha K0 gamma' L^2 / 2)`` (kN), the in-situ sigma_n, perimeter P."""
         alpha, k = dp_outer_cone(self.c, self.phi)
         L = self.L
         return perimeter * (k * L + 3.0 * alpha * self.K0 * (self.gamma - GAMMA_W) * L**2 / 2.0)
