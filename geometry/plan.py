@@ -32,6 +32,7 @@ import numpy as np
 
 from pilegroup.errors import ScenarioError
 from pilegroup.geometry.spec import GeometrySpec, PileSpec
+from pilegroup.model.mesh_estimate import edges_around
 
 __all__ = [
     "CellPiles",
@@ -64,9 +65,8 @@ def polygon_radius(radius: float, n_sides: int) -> float:
 
 def circumferential_divisions(spec: GeometrySpec) -> int:
     """Number of element edges around every pile circle (multiple of 4)."""
-    d = max(p.diameter for p in spec.piles)
-    h = spec.sizing.h_pile
-    return max(spec.sizing.n_circ_min, 4 * math.ceil(math.pi * d / (4.0 * h) - 1e-9))
+    return edges_around(max(p.diameter for p in spec.piles), spec.sizing.h_pile,
+                        spec.sizing.n_circ_min)
 
 
 def meshed_radii(spec: GeometrySpec) -> list[float]:

@@ -22,6 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pilegroup.geometry.spec import GeometrySpec
+from pilegroup.model.mesh_estimate import column_sizes, size_integral, slab_elements
 
 __all__ = ["Segment", "vertical_segments"]
 
@@ -77,30 +78,22 @@ def _size_function(spec: GeometrySpec) -> SizeFunction:
                              for lay in spec.layers])
 
     def dz(z: np.ndarray) -> np.ndarray:
-        g = s.dz_growth - 1.0
-        val = np.full_like(z, np.inf)
-        for zf, d0 in foci:
-            val = np.minimum(val, d0 + g * np.abs(z - zf))
-        cap = np.where(z >= z_deepest, s.dz_max, s.dz_max_deep)
+        val = column_sizes(z, foci, s.dz_growth, z_deepest, s.dz_max, s.dz_max_deep)
         # layer index of each z (boundaries belong to the layer above)
         idx = np.searchsorted(-bottoms, -z, side="left")
         idx = np.clip(idx, 0, len(layer_caps) - 1)
-        return np.minimum(np.minimum(val, cap), layer_caps[idx])
+        return np.minimum(val, layer_caps[idx])
 
     return dz
 
 
 def _graded(z0: float, z1: float, dz: SizeFunction, n_min: int) -> tuple[float, ...]:
     """Cumulative height fractions from z0 towards z1 following the size function dz."""
-    length = abs(z1 - z0)
-    s = np.linspace(0.0, length, 4001)
-    z = z0 + np.sign(z1 - z0) * s
-    w = 1.0 / dz(z)
-    cum = np.concatenate([[0.0], np.cumsum(0.5 * (w[1:] + w[:-1]) * np.diff(s))])
+    s, cum = size_integral(z0, z1, dz)
     total = cum[-1]
-    n = max(n_min, int(np.ceil(total - 1e-6)))
+    n = slab_elements(total, n_min)
     t = np.linspace(0.0, total, n + 1)[1:]
-    frac = np.interp(t, cum, s) / length
+    frac = np.interp(t, cum, s) / abs(z1 - z0)
     frac[-1] = 1.0
     return tuple(float(f) for f in frac)
 

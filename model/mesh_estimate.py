@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import itertools
 import math
+from collections.abc import Callable
 from typing import Protocol
 
 import numpy as np
@@ -77,6 +78,44 @@ def graded_count(length: float, start: float, cap: float, growth: float) -> floa
     return math.log(cap / start) / a + (length - reach) / cap
 
 
+def edges_around(d_max: float, h: float, n_circ_min: int) -> int:
+    """Element edges around every pile circle (the mesher's rule, a multiple of 4).
+
+    ``max(n_circ_min, 4 ceil(pi d / 4 h))`` with ``d`` the largest diameter and ``h`` the size
+    at the piles (m).
+    """
+    return max(n_circ_min, 4 * math.ceil(math.pi * d_max / (4.0 * h) - 1e-9))
+
+
+def column_sizes(z: np.ndarray, foci: list[tuple[float, float]], growth: float,
+                 z_deepest: float, dz_max: float, dz_max_deep: float) -> np.ndarray:
+    """The mesher's vertical element size (m) at the levels ``z`` (m, up; ground surface 0).
+
+    ``min_k (dz_k + (growth - 1) |z - z_k|)`` over the ``foci`` ``(z_k, dz_k)``, at most
+    ``dz_max`` above the deepest toe ``z_deepest`` and ``dz_max_deep`` below it.
+    """
+    val = np.full_like(z, np.inf)
+    for zf, d0 in foci:
+        val = np.minimum(val, d0 + (growth - 1.0) * np.abs(z - zf))
+    return np.minimum(val, np.where(z >= z_deepest, dz_max, dz_max_deep))
+
+
+def size_integral(z0: float, z1: float, size: Callable[[np.ndarray], np.ndarray]
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """Distances from ``z0`` towards ``z1`` (m, 4001 samples) and ``int 1 / size`` up to each.
+
+    A slab has ``max(min_layer_divisions, ceil(total - 1e-6))`` elements (:func:`slab_elements`).
+    """
+    s = np.linspace(0.0, abs(z1 - z0), 4001)
+    w = 1.0 / size(z0 + np.sign(z1 - z0) * s)
+    return s, np.concatenate([[0.0], np.cumsum(0.5 * (w[1:] + w[:-1]) * np.diff(s))])
+
+
+def slab_elements(total: float, n_min: int) -> int:
+    """Elements across a slab whose ``int 1 / dz`` is ``total``: at least ``n_min``."""
+    return max(n_min, int(np.ceil(total - 1e-6)))
+
+
 def plan_quads(sc: EstimatedScenario) -> float:
     """Estimated plan quads of the whole block (no symmetry reduction).
 
@@ -90,7 +129,7 @@ def plan_quads(sc: EstimatedScenario) -> float:
     """
     m = sc.numerics.mesh
     h, h_far = m.size_m, max(m.far_field_size_m, m.size_m)
-    n = max(m.n_circ_min, 4 * math.ceil(math.pi * max(sc.piles.diameters) / (4.0 * h) - 1e-9))
+    n = edges_around(max(sc.piles.diameters), h, m.n_circ_min)
     xs = {round(x, 6) for x, _ in sc.piles.xy}
     ys = {round(y, 6) for _, y in sc.piles.xy}
     if sc.cap is not None:
@@ -130,10 +169,9 @@ def element_layers(sc: EstimatedScenario) -> float:
     """Element layers of the extrusion (soil and cap), by the mesher's rule (docs/geometry.md).
 
     The soil column is cut at every layer boundary, pile toe and the water table; a slab has
-    ``max(min_layer_divisions, ceil(int 1 / dz))`` elements, ``dz(z)`` growing by
-    ``dz_growth`` from the ground surface (``dz_surface_m``) and the toes (``dz_toe_m``) up to
-    ``dz_max_m`` above the deepest toe and ``dz_max_deep_m`` below it; the cap's slabs (cut at
-    the pile tops) ``ceil(thickness / dz_cap_m)``.
+    :func:`slab_elements` of the :func:`size_integral` of :func:`column_sizes` (from the ground
+    surface, ``dz_surface_m``, and the toes, ``dz_toe_m``); the cap's slabs (cut at the pile
+    tops) ``ceil(thickness / dz_cap_m)``.
     """
     m = sc.numerics.mesh
     depth = sc.site.depth_m
@@ -141,13 +179,13 @@ def element_layers(sc: EstimatedScenario) -> float:
     bottoms = list(itertools.accumulate(lay.thickness_m or depth for lay in sc.layers))
     cuts = sorted({0.0, depth, *toes, *(d for d in bottoms if d < depth),
                    *([sc.site.water_table_depth_m] if sc.site.water_table_depth_m > 0 else [])})
-    foci = [(0.0, m.dz_surface_m)] + [(t, m.dz_toe_m) for t in toes]
-    n = 0
-    for top, bot in itertools.pairwise(cuts):
-        d = np.linspace(top, bot, 401)
-        dz = np.min([d0 + (m.dz_growth - 1.0) * np.abs(d - z0) for z0, d0 in foci], axis=0)
-        dz = np.minimum(dz, np.where(d <= toes[-1], m.dz_max_m, m.dz_max_deep_m))
-        n += max(m.min_layer_divisions, math.ceil(np.trapezoid(1.0 / dz, d) - 1e-6))
+    foci = [(0.0, m.dz_surface_m)] + [(-t, m.dz_toe_m) for t in toes]
+
+    def size(z: np.ndarray) -> np.ndarray:
+        return column_sizes(z, foci, m.dz_growth, -toes[-1], m.dz_max_m, m.dz_max_deep_m)
+
+    n = sum(slab_elements(size_integral(-top, -bot, size)[1][-1], m.min_layer_divisions)
+            for top, bot in itertools.pairwise(cuts))
     if sc.cap is not None:
         t = sc.cap.thickness_m
         levels = sorted({0.0, t, sc.piles.embedment_m})
@@ -171,5 +209,6 @@ def estimated_unknowns(sc: EstimatedScenario, fraction: float = 1.0) -> float:
     return cells * VERTICES_PER_CELL * UNKNOWNS_PER_VERTEX[sc.numerics.element]
 
 
-__all__ = ["MAX_CELLS", "SAFETY", "UNKNOWNS_PER_VERTEX", "VERTICES_PER_CELL", "element_layers",
-           "estimated_cells", "estimated_unknowns", "graded_count", "plan_quads"]
+__all__ = ["MAX_CELLS", "SAFETY", "UNKNOWNS_PER_VERTEX", "VERTICES_PER_CELL", "column_sizes",
+           "edges_around", "element_layers", "estimated_cells", "estimated_unknowns",
+           "graded_count", "plan_quads", "size_integral", "slab_elements"]
