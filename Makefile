@@ -13,7 +13,7 @@ else
 STAMP  := $(VENV)/.installed
 endif
 
-.PHONY: run run-mesh test test-slow test-mpi lint bootstrap clean
+.PHONY: run run-mesh test test-slow test-hypre test-mpi lint bootstrap clean
 
 ifeq ($(SYSTEM_PACKAGES),1)
 $(STAMP): pyproject.toml
@@ -44,6 +44,10 @@ test: $(STAMP)
 
 test-slow: $(STAMP)
 	$(PY) -m pytest -m slow -q
+
+# the hypre preset's tests: they need a PETSc with hypre (the Docker image's; skipped elsewhere)
+test-hypre: $(STAMP)
+	$(PY) -m pytest -m hypre -q -rs
 
 lint: $(STAMP)
 	$(VENV)/bin/ruff check .

@@ -252,7 +252,7 @@ class LinearSolver:
 
     preset: Literal["auto", "direct", "direct_reuse", "direct_reuse_double", "direct_reuse_ooc",
                     "direct_reuse_ooc_double", "fieldsplit_gamg", "fieldsplit_pier",
-                    "fieldsplit_kept"] = "auto"
+                    "fieldsplit_kept", "fieldsplit_hypre"] = "auto"
     """The preset of PETSc options; ``auto``: the one measured fastest (docs/solver.md)."""
     options: dict[str, str | int | float | bool] = field(default_factory=dict)
     """PETSc options (names without the problem prefix) over the preset's."""

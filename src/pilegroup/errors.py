@@ -122,6 +122,14 @@ class MachineTooSmall(ScenarioError):
     """
 
 
+class PresetUnavailable(ScenarioError):
+    """The scenario names a linear-solver preset this PETSc build cannot run.
+
+    The build lacks an external package the preset needs (e.g. hypre): one line, exit code 2,
+    before meshing.
+    """
+
+
 class OutputError(OSError):
     """An output file of a run could not be written; the message names the file and why.
 
@@ -208,6 +216,6 @@ class RunInterrupted(PilegroupError):
 
 __all__ = [
     "ConstitutiveError", "ConvergenceError", "FolderBusy", "OutputError", "PilegroupError",
-    "RunInterrupted", "ScenarioError", "SolverError", "SolverInputError", "StepFailure",
-    "describe", "entry_name", "shorten",
+    "PresetUnavailable", "RunInterrupted", "ScenarioError", "SolverError", "SolverInputError",
+    "StepFailure", "describe", "entry_name", "shorten",
 ]

@@ -21,6 +21,7 @@ from typing import Any
 
 from pilegroup.errors import SolverInputError
 from pilegroup.model import Scenario
+from pilegroup.solver.presets import check_available, missing_packages
 
 
 @dataclass(frozen=True)
@@ -74,10 +75,11 @@ def auto_preset(dofs: int, model: str = "*", interface: bool = True,
     """The preset ``auto`` stands for, from the first row of ``table`` that matches.
 
     A system of ``dofs`` unknowns, model part ``model``, piles joined by the interface
-    (``interface``) or tied.
+    (``interface``) or tied. Rows whose preset this PETSc cannot run (the hypre preset where
+    PETSc has no hypre) are passed over.
     """
     for row in table:
-        if row.matches(model, interface, dofs):
+        if row.matches(model, interface, dofs) and not missing_packages(row.preset):
             return row.preset
     raise SolverInputError(f"no preset in the auto table for {dofs} unknowns, model {model!r},"
                            f" interface {interface}")
@@ -87,10 +89,12 @@ def scenario_preset(sc: Scenario, model: str, dofs: int, asked: str | None = Non
     """The preset a run of ``sc`` uses: ``asked`` (or the scenario's), ``auto`` resolved.
 
     ``model``: the model part the run holds (``ResolvedGeometry.symmetry``); ``dofs``: its
-    unknowns (counted on the mesh, or estimated before meshing).
+    unknowns (counted on the mesh, or estimated before meshing). A preset named that this
+    PETSc cannot run is refused (:class:`SolverInputError`, one line).
     """
     preset = asked or sc.numerics.solver.preset
     if preset != "auto":
+        check_available(preset)
         return preset
     return auto_preset(dofs, model, sc.interface.mode != "tied")
 

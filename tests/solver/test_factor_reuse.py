@@ -105,7 +105,7 @@ def test_kept_lu_is_single_precision(monkeypatch):
     """``direct_reuse`` factorises in single precision (one solve with a fresh factorisation
     leaves a residual of single-precision size, the double preset one of double size); a
     PETSc whose MUMPS has no single precision gets the double factorisation instead."""
-    from pilegroup.solver import linsolve
+    from pilegroup.solver import linsolve, presets
 
     n = 400
     A = _shifted_laplacian(n, n)
@@ -123,8 +123,8 @@ def test_kept_lu_is_single_precision(monkeypatch):
         ksp.destroy()
     assert 1e-9 < residual["direct_reuse"] < 1e-4  # single: about 1e-7
     assert residual["direct_reuse_double"] < 1e-12
-    assert linsolve.mumps_single_precision()
-    monkeypatch.setattr(linsolve, "mumps_single_precision", lambda: False)
+    assert presets.mumps_single_precision()
+    monkeypatch.setattr(presets, "mumps_single_precision", lambda: False)
     assert linsolve.merged_options("direct_reuse")["pc_precision"] == "double"
 
 
@@ -134,7 +134,7 @@ def test_split_lu_blocks_are_single_precision(monkeypatch):
     whose MUMPS has no single precision gets double factorisations of them instead."""
     from petsc4py import PETSc
 
-    from pilegroup.solver import linsolve
+    from pilegroup.solver import linsolve, presets
 
     A = _shifted_laplacian(300, 100)  # three decoupled blocks, one per split
     blocks = [(name, PETSc.IS().createStride(100, 100 * k, 1, comm=PETSc.COMM_SELF), None)
@@ -151,7 +151,7 @@ def test_split_lu_blocks_are_single_precision(monkeypatch):
         r.axpy(-1.0, x)
         assert 1e-9 < r.norm() / x.norm() < 1e-4, name  # single: about 1e-7
     ksp.destroy()
-    monkeypatch.setattr(linsolve, "mumps_single_precision", lambda: False)
+    monkeypatch.setattr(presets, "mumps_single_precision", lambda: False)
     opts = linsolve.merged_options("fieldsplit_kept")
     assert opts["fieldsplit_p_pc_precision"] == opts["fieldsplit_structure_pc_precision"] \
         == "double"
