@@ -275,13 +275,13 @@ class SolverOptions:
     """Linear solver: a named preset of PETSc options merged with overrides.
 
     Attributes:
-        preset: a name of :data:`~pilegroup.solver.linsolve.PRESETS` (docs/solver.md):
+        preset: a name of :data:`~pilegroup.solver.presets.PRESETS` (docs/solver.md):
             ``"direct"`` (MUMPS LU), ``"direct_reuse"`` (FGMRES on a kept single-precision
-            LU; ``"direct_reuse_double"`` in double precision), the field splits
-            ``"fieldsplit_gamg"``, ``"fieldsplit_pier"`` and ``"fieldsplit_kept"``.
+            LU), the field splits ``"fieldsplit_gamg"``, ``"fieldsplit_pier"``,
+            ``"fieldsplit_kept"``, ``"fieldsplit_hypre"`` (where PETSc has hypre).
         overrides: extra PETSc options (without prefix), applied after the preset.
         band_layers: cell layers of soil around the interface that join the structure's exact
-            block of a ``fieldsplit_pier`` split (``linsolve.Preset.band_layers``); ``None``:
+            block of a ``fieldsplit_pier`` split (``presets.Preset.band_layers``); ``None``:
             the preset's own.
         prefix: PETSc options prefix of this problem.
         newton: Newton settings.

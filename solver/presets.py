@@ -57,6 +57,10 @@ class Preset:
             layers of the interface nodes, which stay in the ``"soil"`` block too: the two
             blocks overlap there (multiplicative Schwarz between them); a problem's
             ``SolverOptions.band_layers`` replaces it.
+        band_width_m: the band's width in metres: a run turns it into cell layers at its pile
+            mesh size (``SolverOptions.band_layers``), as the iterations of a GAMG soil block
+            follow the band's width, not its layer count; ``None``: ``band_layers`` at every
+            size.
         fixed_stress: the preset needs the fixed-stress preconditioning matrix.
         reuse_factor_its: > 0: keep the LU across Newton iterations and steps as FGMRES's
             preconditioner; refactor after a solve needing this many iterations more than the
@@ -87,6 +91,7 @@ class Preset:
     fieldsplit: bool = False
     splits: tuple[str, ...] = ("u", "p")
     band_layers: int = 0
+    band_width_m: float | None = None
     fixed_stress: bool = False
     reuse_factor_its: int = 0
     fallback: str | None = None
@@ -179,6 +184,7 @@ PRESETS: dict[str, Preset] = {
         fieldsplit=True,
         splits=("p", "structure", "soil"),
         band_layers=2,
+        band_width_m=2.0,
         fixed_stress=True,
         fallback="direct_reuse",
     ),

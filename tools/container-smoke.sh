@@ -8,7 +8,8 @@
 #   1. pilegroup --help;
 #   2. pilegroup run single_pile (serial) and mpirun -n 2 pilegroup run single_pile, timed; the
 #      image's STOPSIGNAL to a 2-rank run (what `docker stop` does): checkpoint, 128 + signal;
-#   3. the tests: `make test` (ruff and the fast tier, against Debian's packages) or a subset;
+#   3. the tests: `make test` (ruff and the fast tier, against Debian's packages) or a subset,
+#      and `make test-hypre` (the hypre preset's tests: Debian's PETSc has hypre);
 #   4. the cap settlement of both runs against a serial run in the repository's .venv (if any).
 # and prints a Markdown summary (also in ROOT/smoke-result.md).
 #
@@ -248,7 +249,7 @@ t_stop=$(run_timed stop "rm -rf out/smoke-stop; mpirun -n 2 pilegroup run single
   kill -0 \$pid || exit 1; sleep 0.2; done; kill -s $sig \$pid; wait \$pid; rc=\$?; \
   echo exit \$rc; [ \$rc = $((128 + $(kill -l "$sig"))) ] \
   && grep -q '\"status\": \"interrupted\"' out/smoke-stop/summary.json")
-t_tests=-; tests_line=none
+t_tests=-; tests_line=none; hypre_summary=-; t_hypre=-
 case $tests in
   fast) log "make test"; t_tests=$(run_timed tests "make test"); tests_line="make test" ;;
   smoke) log "ruff and the smoke subset"
@@ -256,6 +257,12 @@ case $tests in
          tests_line="make lint; pytest -m 'not slow' $(echo $SMOKE_TESTS)" ;;
 esac
 tests_summary=$( [ "$tests" = none ] || grep -E '[0-9]+ (passed|failed)' "$root/tests.log" | tail -1)
+# The hypre preset's tests (marker hypre; skipped where PETSc has no hypre, run here).
+if [ "$tests" != none ]; then
+  log "make test-hypre"
+  t_hypre=$(run_timed hypre "make test-hypre")
+  hypre_summary=$(grep -E '[0-9]+ (passed|failed)' "$root/hypre.log" | tail -1)
+fi
 
 # The cap settlement against a serial run in the repository's venv (PyPI's wheels).
 venv_run=$root/venv-single-pile
@@ -306,6 +313,7 @@ umount_all
   echo "| \`mpirun -n 2 pilegroup run single_pile\` | $t_mpi |"
   echo "| \`docker stop\` ($stopsignal to \`mpirun\` after the first checkpoint): $(grep '^exit' "$root/stop.log"), summary \`interrupted\` | $t_stop |"
   echo "| tests: \`$tests_line\` ($tests_summary) | $t_tests |"
+  echo "| the hypre preset's tests: \`make test-hypre\` ($hypre_summary) | $t_hypre |"
   echo "| the same serial run in the repository's .venv | $t_venv |"
   echo
   echo "| cap settlement at the last output time | m |"

@@ -56,6 +56,7 @@ from pilegroup.solver import (
     run_stages,
     run_summary,
 )
+from pilegroup.solver.presets import get_preset
 from pilegroup.solver.probes import facet_area
 from pilegroup.studies.results.records import SOLVER_SUMMARY_JSON, RunSummary
 from pilegroup.studies.results.tables import GAUGES_CSV, STIFFNESS_CSV
@@ -91,19 +92,15 @@ CAPACITY_STEPS = 50
 #: cycles (docs/solver.md, "Newton").
 FADE_FACTOR, FADE_LENGTH_M = InterfaceOptions.normal_stiffness_factor, 1.0
 
-#: Width (m) of the soil around the pile–soil interface that ``fieldsplit_pier`` solves exactly
-#: with the structure (:func:`band_layers`).
-BAND_WIDTH_M = 2.0
-
-
-def band_layers(h: float) -> int:
+def band_layers(h: float, width_m: float) -> int:
     """Cell layers of soil in the exact block of ``fieldsplit_pier`` at pile mesh size ``h``.
 
-    Enough layers of the size ``h`` (m, at the pile surfaces) for :data:`BAND_WIDTH_M`. On the
-    full Pier 667 the iterations follow the band's width, not its layer count: two layers at
-    h = 1 m and six at 0.3 m need about the same, two at 0.3 m 60 % more (docs/benchmarks.md).
+    Enough layers of the size ``h`` (m, at the pile surfaces) for the band's width ``width_m``
+    (``Preset.band_width_m``). On the full Pier 667 the iterations follow the band's width, not
+    its layer count: two layers at h = 1 m and six at 0.3 m need about the same, two at 0.3 m
+    60 % more (docs/benchmarks.md).
     """
-    return max(1, math.ceil(BAND_WIDTH_M / h - 1e-9))
+    return max(1, math.ceil(width_m / h - 1e-9))
 
 
 def soil_law(sc: Scenario, j: int) -> ConstitutiveLaw:
@@ -161,8 +158,9 @@ def build_problem(sc: Scenario, geo: ResolvedGeometry, md: MeshData, preset: str
     newton = NewtonOptions(rtol=num.newton_rtol, atol=num.newton_atol, max_it=num.time.max_newton,
                            krylov_forcing=num.solver.krylov_forcing)
     h = geo.spec.sizing.h_pile
+    width = get_preset(p).band_width_m
     opts = SolverOptions(preset=p, overrides=dict(num.solver.options), newton=newton,
-                         band_layers=band_layers(h))
+                         band_layers=None if width is None else band_layers(h, width))
     return BiotProblem(md, materials, disc, displacement_bcs=dbcs,
                        pressure_bcs=drainage(sc), loads=loads, options=opts,
                        interface=interface_coupling(sc, h, shaft_factor(geo.spec)),

@@ -150,9 +150,9 @@ def test_the_band_keeps_its_width_at_every_mesh_size(small):
     """A problem built for a mesh size takes the band layers that cover about 2 m of soil (no
     extra layer from round-off at h = 0.3 m); a negative count is refused."""
     sc, md = small
-    assert [pier.band_layers(h) for h in (2.0, 1.0, 0.8, 0.6, 0.3, 0.1)] == [1, 2, 3, 4, 7, 20]
+    assert [pier.band_layers(h, 2.0) for h in (2.0, 1.0, 0.8, 0.6, 0.3, 0.1)] == [1, 2, 3, 4, 7, 20]
     pb = pier.build_problem(sc, resolve_geometry(sc), md)
-    assert pb.options.band_layers == pier.band_layers(sc.numerics.mesh.size_m)
+    assert pb.options.band_layers == pier.band_layers(sc.numerics.mesh.size_m, 2.0)
     with pytest.raises(SolverInputError, match="band_layers = -1"):
         SolverOptions(band_layers=-1)
 
