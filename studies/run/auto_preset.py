@@ -21,7 +21,7 @@ from typing import Any
 
 from pilegroup.errors import SolverInputError
 from pilegroup.model import Scenario
-from pilegroup.solver.presets import check_available, missing_packages
+from pilegroup.solver.presets import check_available, get_preset, missing_packages
 
 
 @dataclass(frozen=True)
@@ -104,12 +104,22 @@ def fastest_rows(results: Iterable[Mapping[str, Any]]) -> list[AutoRow]:
 
     Per (model, interface) and measured size, the preset of the shortest complete run, up to
     that size's unknowns; the largest size's row holds for any larger system, and neighbouring
-    rows with the same preset are merged.
+    rows with the same preset are merged. Where a preset that needs an external package
+    (``Preset.requires``: hypre) is chosen anywhere, the rows of the runs of the other presets
+    follow: a PETSc without that package passes over its rows (:func:`auto_preset`) to them.
 
     ``results``: rows of ``pilegroup bench presets`` (``symmetry``, ``interface``, ``dofs``,
     ``preset``, ``status``, ``wall_s``).
     """
     done = [r for r in results if r.get("status") == "complete"]
+    rows = _fastest(done)
+    if any(get_preset(r.preset).requires for r in rows):
+        rows += _fastest([r for r in done if not get_preset(str(r["preset"])).requires])
+    return rows
+
+
+def _fastest(done: Iterable[Mapping[str, Any]]) -> list[AutoRow]:
+    """:func:`fastest_rows` of complete runs ``done``, without the rows for other PETSc."""
     groups: dict[tuple[str, bool], dict[int, list[Mapping[str, Any]]]] = {}
     for r in done:
         sizes = groups.setdefault((str(r["symmetry"]), bool(r["interface"])), {})

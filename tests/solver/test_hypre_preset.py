@@ -101,13 +101,3 @@ def test_auto_passes_over_rows_this_petsc_cannot_run(monkeypatch, hypre):
     got = auto.auto_preset(10_000_000, "none", True, table)
     assert got == ("fieldsplit_hypre" if hypre else "direct_reuse")
     assert auto.auto_preset(10_000, "none", True, table) == "direct"
-
-
-def test_every_preset_of_the_scenario_keys_is_known():
-    """The scenario's preset names are the solver's presets (and ``auto``)."""
-    from typing import get_args, get_type_hints
-
-    from pilegroup.model.analysis import LinearSolver
-
-    names = set(get_args(get_type_hints(LinearSolver)["preset"]))
-    assert names == set(presets.PRESETS) | {"auto"}

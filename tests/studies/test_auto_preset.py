@@ -61,6 +61,27 @@ def test_table_regenerated_from_benchmark_results():
     assert table == (ap.SMALL_ROW, *rows, ap.FALLBACK_ROW)
 
 
+@pytest.mark.parametrize("hypre", [False, True])
+def test_table_with_a_hypre_preset_serves_a_petsc_without_it(monkeypatch, hypre):
+    """Where the hypre preset wins at the large size, the table also holds the other presets'
+    rows: a PETSc with hypre takes it past the crossover, one without it the kept LU."""
+    from pilegroup.solver import presets
+
+    res = [{"symmetry": "none", "interface": True, "dofs": d, "preset": p, "status": "complete",
+            "wall_s": w}
+           for d, p, w in ((100_000, "direct_reuse", 50.0), (100_000, "fieldsplit_hypre", 80.0),
+                           (900_000, "direct_reuse", 900.0), (900_000, "fieldsplit_hypre", 300.0),
+                           (900_000, "fieldsplit_kept", 1200.0))]
+    rows = ap.fastest_rows(res)
+    assert [(r.max_dofs, r.preset) for r in rows] == [
+        (100_000, "direct_reuse"), (None, "fieldsplit_hypre"), (None, "direct_reuse")]
+    monkeypatch.setattr(presets, "has_package", lambda package: hypre)
+    table = (ap.SMALL_ROW, *rows, ap.FALLBACK_ROW)
+    assert ap.auto_preset(90_000, "none", True, table) == "direct_reuse"
+    assert ap.auto_preset(2_000_000, "none", True, table) == (
+        "fieldsplit_hypre" if hypre else "direct_reuse")
+
+
 def test_auto_reaches_the_solver(tmp_path, monkeypatch, small_pile):
     """The problem is built with the table's preset for its size, model and interface."""
     monkeypatch.setenv("PILEGROUP_MESH_CACHE", str(tmp_path / "cache"))
