@@ -24,6 +24,8 @@ Presets (docs/solver.md, "Linear solvers"; measured in docs/benchmarks.md):
   precision; the displacement blocks overlap on the band (multiplicative Schwarz there).
 * ``fieldsplit_kept``: ``fieldsplit_pier`` whose structure block keeps its LU across new
   Jacobians (``Preset.keep_blocks``) until a solve needs more than 60 iterations.
+* ``fieldsplit_hypre`` (needs hypre): ``fieldsplit_kept`` with one BoomerAMG V-cycle on the
+  pressure and on the soil (systems AMG, unknown by unknown) and a band of two cell layers.
 """
 
 from __future__ import annotations

@@ -73,6 +73,7 @@ MEASURED_PEAKS: dict[str, tuple[tuple[int, float], ...]] = {
 #: The family of each preset (``direct`` factors every matrix: the double LU's family).
 FAMILY = {"direct": "lu", "direct_reuse": "lu_single", "direct_reuse_double": "lu",
           "fieldsplit_pier": "split", "fieldsplit_kept": "split", "fieldsplit_gamg": "split",
+          "fieldsplit_hypre": "split",
           "direct_reuse_ooc": "lu_single_ooc",
           # only ever a fallback; its one measured peak (quarter pier 1 m: 1,192 MB) lies below
           # the in-core double LU's, whose fit therefore bounds it from above
