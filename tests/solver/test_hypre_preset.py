@@ -8,25 +8,13 @@ import pytest
 from mpi4py import MPI
 
 from pilegroup.errors import PresetUnavailable
-from pilegroup.geometry.adapter import geometry_spec, resolve_geometry
+from pilegroup.geometry.adapter import geometry_spec
 from pilegroup.geometry.convert import build_mesh
 from pilegroup.model import load_scenario
 from pilegroup.solver import presets
-from pilegroup.solver.probes import SettlementProbe
-from pilegroup.solver.stepping import run_stages
 from pilegroup.studies.run import auto_preset as auto
-from pilegroup.studies.run import pipeline as pier
 
 HAS_HYPRE = presets.has_package("hypre")
-
-
-def _run(sc, md, preset):
-    """Settlement (m), run log and problem of the scenario's stages with ``preset``."""
-    pb = pier.build_problem(sc, resolve_geometry(sc), md, preset)
-    probe = SettlementProbe(pb, pier.loaded_facets(sc, md))
-    log = run_stages(pb, pier.solver_stages(sc), pier.time_stepping(sc),
-                     geostatic_tol=pier.GEOSTATIC_TOL_M)
-    return probe(), log, pb
 
 
 @pytest.fixture
@@ -37,13 +25,13 @@ def small(tmp_path, monkeypatch, small_pile):
 
 
 @pytest.mark.hypre
-def test_hypre_preset_gives_the_direct_answer(small):
+def test_hypre_preset_gives_the_direct_answer(small, run_preset):
     """BoomerAMG on the soil and the pressure, the kept LU of the structure: the settlement
     of MUMPS LU to 1e-6 (relative), the same Newton iterations, at most 40 Krylov iterations
     per Newton solve, no hand-over to the fallback."""
     sc, md = small
-    w_ref, log_ref, _ = _run(sc, md, "direct")
-    w, log, pb = _run(sc, md, "fieldsplit_hypre")
+    _, w_ref, log_ref = run_preset(sc, md, "direct")
+    pb, w, log = run_preset(sc, md, "fieldsplit_hypre")
     assert pb.linear_solver.preset == "fieldsplit_hypre" and not pb.linear_solver.fallbacks
     assert w == pytest.approx(w_ref, rel=1e-6)
     assert log.newton_total == log_ref.newton_total
