@@ -362,7 +362,7 @@ class BlockLayout:
 
     def splits(self, A: PETSc.Mat, names: tuple[str, ...], band_layers: int = 0
                ) -> list[tuple[str, PETSc.IS, PETSc.NullSpace | None]]:
-        """Index sets of the field-split blocks ``names`` of ``A`` (``linsolve.Preset.splits``).
+        """Index sets of the field-split blocks ``names`` of ``A`` (``presets.Preset.splits``).
 
         ``"u"`` (every displacement, with the rigid-body modes), ``"p"`` (pressure),
         ``"structure"`` and ``"soil"`` (:meth:`interface_index_sets` with ``band_layers``; the

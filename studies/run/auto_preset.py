@@ -9,7 +9,7 @@ and prints the table this module should hold (:func:`table_source`), so the choi
 regenerated from measurements, not edited by hand.
 
 A preset that fails during a run still hands over to its fallback with one warning line
-(``solver.linsolve.Preset.fallback``).
+(``solver.presets.Preset.fallback``).
 """
 
 from __future__ import annotations
