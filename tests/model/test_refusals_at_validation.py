@@ -280,7 +280,7 @@ CATALOGUE: dict[str, tuple[str, ...]] = {
     "solver/layout.py::BlockLayout._check_coverage": (G, G),
     "solver/layout.py::BlockLayout.splits": (G,),
     "solver/layout.py::BlockLayout.interface_soil_nodes": (G,),
-    "solver/linsolve.py::get_preset": (G,),
+    "solver/presets.py::get_preset": (G,),
     "solver/linsolve.py::create_ksp": (G,),
     "solver/mumps.py::OutOfCoreFolder.__init__": ("machine",),  # a folder for the factors
     "solver/problem.py::BiotProblem.__init__": ("installation-with-tied-piles",),
