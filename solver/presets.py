@@ -204,6 +204,7 @@ for _lu in ("direct_reuse", "direct_reuse_ooc"):  # their fallbacks: the same LU
 PRESETS["fieldsplit_kept"] = dataclasses.replace(
     PRESETS["fieldsplit_pier"], name="fieldsplit_kept", keep_blocks=("structure",), keep_its=60)
 
+
 def _boomeramg(block: str, threshold: float) -> dict[str, Any]:
     """One BoomerAMG V-cycle (hypre) as the preconditioner of field-split block ``block``.
 
@@ -223,13 +224,13 @@ def _boomeramg(block: str, threshold: float) -> dict[str, Any]:
     return {f"fieldsplit_{block}_{k}": v for k, v in opts.items()}
 
 
-PRESETS["fieldsplit_hypre"] = Preset(
-    "fieldsplit_hypre",
-    {**{k: v for k, v in PRESETS["fieldsplit_pier"].options.items()
-        if not k.startswith(("fieldsplit_soil_", "fieldsplit_p_"))},
-     **_boomeramg("p", 0.5), **_boomeramg("soil", 0.7)},
-    fieldsplit=True, splits=("p", "structure", "soil"), band_layers=2, fixed_stress=True,
-    keep_blocks=("structure",), keep_its=60, fallback="direct_reuse", requires=("hypre",))
+# fieldsplit_kept with BoomerAMG on the pressure and the soil, a band of two cell layers at any
+# mesh size (docs/solver.md)
+PRESETS["fieldsplit_hypre"] = dataclasses.replace(
+    PRESETS["fieldsplit_kept"], name="fieldsplit_hypre", band_width_m=None, requires=("hypre",),
+    options={**{k: v for k, v in PRESETS["fieldsplit_kept"].options.items()
+                if not k.startswith(("fieldsplit_soil_", "fieldsplit_p_"))},
+             **_boomeramg("p", 0.5), **_boomeramg("soil", 0.7)})
 
 
 @functools.cache

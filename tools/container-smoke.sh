@@ -8,8 +8,8 @@
 #   1. pilegroup --help;
 #   2. pilegroup run single_pile (serial) and mpirun -n 2 pilegroup run single_pile, timed; the
 #      image's STOPSIGNAL to a 2-rank run (what `docker stop` does): checkpoint, 128 + signal;
-#   3. the tests: `make test` (ruff and the fast tier, against Debian's packages) or a subset,
-#      and `make test-hypre` (the hypre preset's tests: Debian's PETSc has hypre);
+#   3. the tests: `make test` (ruff and the fast tier, against Debian's packages, the hypre
+#      preset's tests included: Debian's PETSc has hypre) or a subset and `make test-hypre`;
 #   4. the cap settlement of both runs against a serial run in the repository's .venv (if any).
 # and prints a Markdown summary (also in ROOT/smoke-result.md).
 #
@@ -257,11 +257,14 @@ case $tests in
          tests_line="make lint; pytest -m 'not slow' $(echo $SMOKE_TESTS)" ;;
 esac
 tests_summary=$( [ "$tests" = none ] || grep -E '[0-9]+ (passed|failed)' "$root/tests.log" | tail -1)
-# The hypre preset's tests (marker hypre; skipped where PETSc has no hypre, run here).
-if [ "$tests" != none ]; then
+# The hypre preset's tests (marker hypre; skipped where PETSc has no hypre, run here): part of
+# `make test`, run on their own after the subset.
+if [ "$tests" = smoke ]; then
   log "make test-hypre"
   t_hypre=$(run_timed hypre "make test-hypre")
   hypre_summary=$(grep -E '[0-9]+ (passed|failed)' "$root/hypre.log" | tail -1)
+elif [ "$tests" = fast ]; then
+  hypre_summary="in make test"
 fi
 
 # The cap settlement against a serial run in the repository's venv (PyPI's wheels).

@@ -90,7 +90,7 @@ def scenario_preset(sc: Scenario, model: str, dofs: int, asked: str | None = Non
 
     ``model``: the model part the run holds (``ResolvedGeometry.symmetry``); ``dofs``: its
     unknowns (counted on the mesh, or estimated before meshing). A preset named that this
-    PETSc cannot run is refused (:class:`SolverInputError`, one line).
+    PETSc cannot run is refused (:class:`~pilegroup.errors.PresetUnavailable`, one line).
     """
     preset = asked or sc.numerics.solver.preset
     if preset != "auto":

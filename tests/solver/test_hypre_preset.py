@@ -1,6 +1,7 @@
 """The hypre preset (``fieldsplit_hypre``): the direct answer where PETSc has hypre (tests marked
 ``hypre``, run in the Docker image by ``tools/container-smoke.sh``; skipped with the reason
-elsewhere), one line and exit 2 where it has none, and ``auto`` never picks it there."""
+elsewhere), and one line and exit 2 where it has none (``auto`` passing it over there:
+tests/studies/test_auto_preset.py)."""
 
 import json
 
@@ -12,7 +13,6 @@ from pilegroup.geometry.adapter import geometry_spec
 from pilegroup.geometry.convert import build_mesh
 from pilegroup.model import load_scenario
 from pilegroup.solver import presets
-from pilegroup.studies.run import auto_preset as auto
 
 HAS_HYPRE = presets.has_package("hypre")
 
@@ -77,15 +77,3 @@ def test_check_available_names_the_missing_package(monkeypatch):
         presets.check_available("fieldsplit_hypre")
     presets.check_available("direct_reuse")
     assert presets.missing_packages("fieldsplit_hypre") == ("hypre",)
-
-
-@pytest.mark.parametrize("hypre", [False, True])
-def test_auto_passes_over_rows_this_petsc_cannot_run(monkeypatch, hypre):
-    """``auto`` takes a hypre row only where PETSc has hypre; elsewhere the next row that
-    matches (the kept LU)."""
-    monkeypatch.setattr(presets, "has_package", lambda package: hypre)
-    table = (auto.SMALL_ROW, auto.AutoRow("*", True, None, "fieldsplit_hypre"),
-             auto.FALLBACK_ROW)
-    got = auto.auto_preset(10_000_000, "none", True, table)
-    assert got == ("fieldsplit_hypre" if hypre else "direct_reuse")
-    assert auto.auto_preset(10_000, "none", True, table) == "direct"
