@@ -17,8 +17,8 @@ from pilegroup.errors import LinearSolveError, SolverInputError
 from pilegroup.solver.mumps import OOC_FOLDER_OPTION, OutOfCoreFolder
 from pilegroup.solver.presets import PRESETS, Preset, get_preset, merged_options
 
-__all__ = ["PRESETS", "REFACTOR_DT_RATIO", "KSPSolver", "Preset", "check_reason", "create_ksp",
-           "dt_ratio", "get_preset", "merged_options"]
+__all__ = ["PRESETS", "REFACTOR_DT_RATIO", "KSPSolver", "Preset", "check_reason",
+           "clear_options", "create_ksp", "dt_ratio", "get_preset", "merged_options"]
 
 log = logging.getLogger(__name__)
 
@@ -58,12 +58,10 @@ def create_ksp(
         splits: the blocks of a fieldsplit preset, in the preset's order (``Preset.splits``).
     """
     spec = get_preset(preset)
-    opts = PETSc.Options()
     # a clean slate: options an earlier problem of this process left under the prefix (another
     # preset's blocks, its overrides) must not reach this one
-    for key in list(opts.getAll()):
-        if key.startswith(prefix):
-            opts.delValue(key)
+    clear_options(prefix)
+    opts = PETSc.Options()
     for k, v in merged_options(preset, overrides).items():
         opts[f"{prefix}{k}"] = v
     ksp = PETSc.KSP().create(comm)
@@ -80,6 +78,14 @@ def create_ksp(
         pc.setFieldSplitIS(*[(name, is_) for name, is_, _ in splits])
     ksp.setFromOptions()
     return ksp
+
+
+def clear_options(prefix: str) -> None:
+    """Remove every option under ``prefix`` from PETSc's options database."""
+    opts = PETSc.Options()
+    for key in list(opts.getAll()):
+        if key.startswith(prefix):
+            opts.delValue(key)
 
 
 def check_reason(ksp: PETSc.KSP, what: str = "linear solve") -> int:

@@ -6,11 +6,17 @@ Jacobian there (with the fixed-stress preconditioning matrix) and times, on the 
 run, every piece a Newton solve is made of:
 
 * a matrix–vector product with the whole Jacobian and with each field-split block;
-* each block's preconditioner of ``fieldsplit_pier`` on its own: set-up (LU factorisation, AMG
-  hierarchy) and one application (triangular solves, one V-cycle), with the options the preset
-  gives that block;
+* each block's preconditioner of the field-split preset measured (``fieldsplit_pier``, or
+  ``--presets NAME``, e.g. ``fieldsplit_hypre`` where PETSc has hypre) on its own: set-up (LU
+  factorisation, AMG hierarchy) and one application (triangular solves, one V-cycle), with the
+  options the preset gives that block;
 * the whole field-split preconditioner: set-up and one application, and the FGMRES solve of a
   random right-hand side to the preset's tolerance (iterations, time);
+* the iteration floors: the same FGMRES solve with every block of the split solved exactly
+  (MUMPS LU in double precision), and with the two-block displacement–pressure split of the
+  fixed-stress scheme solved exactly: the iterations that no better block preconditioner goes
+  below, the first from the blocks' coupling (the displacement split between structure and
+  soil, the band's width), the second from the fixed-stress splitting alone;
 * the kept LU of ``direct_reuse``: one factorisation and one solve with it;
 * the machine's own floors, every rank at once: the memory bandwidth of a streaming pass
   (numpy, single precision) and the single-precision matrix product's rate (numpy's BLAS, one
@@ -38,7 +44,9 @@ import numpy as np
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from pilegroup.solver.linsolve import create_ksp, merged_options
+from pilegroup.errors import ScenarioError
+from pilegroup.solver.linsolve import clear_options, create_ksp, get_preset, merged_options
+from pilegroup.solver.presets import check_available
 from pilegroup.studies.bench.benchrun import write_table
 
 COLUMNS = ("piece", "rows", "nonzeros", "set_up_s", "apply_s", "iterations", "floor_s", "rate")
@@ -48,6 +56,9 @@ AIJ_BYTES = 12
 STREAM_WORDS = 50_000_000
 #: Order of the single-precision matrix product timed.
 GEMM_N = 2000
+#: A field-split block solved exactly (the iteration floors).
+EXACT_BLOCK = {"ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_solver_type": "mumps",
+               "pc_precision": "double"}
 
 
 class _FirstLoadStep(Exception):
@@ -158,22 +169,23 @@ def _block_rows(comm: MPI.Comm, A: PETSc.Mat, P: PETSc.Mat, splits: list,
 def measure_floors(pb: Any, repeats: int = 5, with_lu: bool = True) -> list[dict[str, Any]]:
     """The rows of the floor table on the current Jacobian of problem ``pb``.
 
-    ``pb``: a :class:`~pilegroup.solver.problem.BiotProblem` built with a field-split preset
-    of the blocks ``p``, ``structure``, ``soil`` (collective).
+    ``pb``: a :class:`~pilegroup.solver.problem.BiotProblem` built with the field-split preset
+    measured (collective).
     """
     comm = pb.comm
     rows, bandwidth = _machine_rows(comm)
     pb.assemble_jacobian(force=True)
     solver = pb.linear_solver
+    name = solver.spec.name
     A, P = solver.A, solver.P if solver.P is not None else solver.A
     x, y = A.createVecs()
     x.setRandom()
     rows.append(_row("MatMult whole Jacobian", A, None,
                      _timed(comm, lambda: A.mult(x, y), repeats),
                      floor=_mult_floor(comm, A, bandwidth)))
-    opts = merged_options("fieldsplit_pier")
-    splits = pb.layout.splits(A, solver.spec.splits, pb.options.band_layers or 0)
-    rows += _block_rows(comm, A, P, splits, opts, repeats, bandwidth)
+    band = solver.spec.band_layers if pb.options.band_layers is None else pb.options.band_layers
+    splits = pb.layout.splits(A, solver.spec.splits, band)
+    rows += _block_rows(comm, A, P, splits, merged_options(name), repeats, bandwidth)
     ksp = solver.ksp
     pc = ksp.getPC()
     def first() -> None:  # the blocks are set up at the first application
@@ -182,17 +194,49 @@ def measure_floors(pb: Any, repeats: int = 5, with_lu: bool = True) -> list[dict
 
     first_apply = _timed(comm, first)
     apply = _timed(comm, lambda: pc.apply(x, y), repeats)
-    set_up = first_apply - apply
-    rows.append(_row("fieldsplit_pier: set-up / one application", A, set_up, apply))
+    rows.append(_row(f"{name}: set-up / one application", A, first_apply - apply, apply))
     b = x.duplicate()
     A.mult(x, b)
     y.set(0.0)
     pc.setReusePreconditioner(True)
     solve = _timed(comm, lambda: ksp.solve(b, y))
-    rows.append(_row("fieldsplit_pier: FGMRES solve (kept set-up)", A, None, solve,
-                     ksp.getIterationNumber()))
+    rows.append(_row(f"{name}: FGMRES solve (kept set-up)", A, None, solve,
+                     ksp.getIterationNumber(), rate=_reason(ksp)))
+    rows += _iteration_floors(pb, A, P, b, y, band)
     if with_lu:
         rows.append(_lu_row(comm, A, x, y, repeats, bandwidth))
+    return rows
+
+
+def _reason(ksp: PETSc.KSP) -> str:
+    reason = ksp.getConvergedReason()
+    return "converged" if reason > 0 else f"not converged (reason {reason})"
+
+
+def _iteration_floors(pb: Any, A: PETSc.Mat, P: PETSc.Mat, b: PETSc.Vec, y: PETSc.Vec,
+                      band: int) -> list[dict[str, Any]]:
+    """FGMRES solves of ``A y = b`` with the blocks of a split solved exactly (:data:`EXACT_BLOCK`).
+
+    The split measured (its blocks, order and band) and the two-block displacement–pressure
+    split of ``fieldsplit_gamg`` (fixed-stress), each to the measured preset's tolerance.
+    """
+    comm, measured = pb.comm, pb.linear_solver.spec
+    tol = {"ksp_rtol": merged_options(measured.name)["ksp_rtol"], "ksp_max_it": 400,
+           "ksp_gmres_restart": 400}
+    rows = []
+    for name, what in ((measured.name, "every block by LU"),
+                       ("fieldsplit_gamg", "displacement and pressure blocks by LU "
+                                           "(the fixed-stress floor)")):
+        spec = get_preset(name)
+        exact = {f"fieldsplit_{blk}_{k}": v for blk in spec.splits for k, v in EXACT_BLOCK.items()}
+        ksp = create_ksp(comm, A, P, "floor_exact_", name, {**exact, **tol},
+                         pb.layout.splits(A, spec.splits, band))
+        y.set(0.0)
+        solve = _timed(comm, lambda ksp=ksp: ksp.solve(b, y))
+        rows.append(_row(f"{name}: FGMRES, {what}", A, None, solve, ksp.getIterationNumber(),
+                         rate=_reason(ksp)))
+        ksp.destroy()
+    clear_options("floor_exact_")
     return rows
 
 
@@ -222,11 +266,12 @@ def _lu_row(comm: MPI.Comm, A: PETSc.Mat, x: PETSc.Vec, y: PETSc.Vec,
 
 def bench_floors(scenario: str, sets: Sequence[str] = (), out_dir: str | Path = "out/bench_floors",
                  mesh_size: float | None = None, repeats: int = 5,
-                 with_lu: bool = True) -> list[dict[str, Any]]:
+                 with_lu: bool = True, preset: str = "fieldsplit_pier") -> list[dict[str, Any]]:
     """Time the pieces of a linear solve at the first load step of ``scenario``.
 
-    Builds the scenario (with ``--set`` overrides ``sets``), solves its geostatic stage and
-    first load step, then prints and writes the table (collective).
+    Builds the scenario (with ``--set`` overrides ``sets``) with the field-split preset
+    ``preset``, solves its geostatic stage and first load step, then prints and writes the
+    table (collective).
     """
     from pilegroup.geometry.adapter import resolve_geometry
     from pilegroup.geometry.convert import build_mesh
@@ -239,6 +284,8 @@ def bench_floors(scenario: str, sets: Sequence[str] = (), out_dir: str | Path = 
         time_stepping,
     )
 
+    if not get_preset(preset).fieldsplit:
+        raise ScenarioError.invalid("bench floors --presets", preset, "a field-split preset")
     comm = MPI.COMM_WORLD
     over: dict[str, Any] = dict(parse_override(kv) for kv in sets)
     if mesh_size is not None:
@@ -246,7 +293,8 @@ def bench_floors(scenario: str, sets: Sequence[str] = (), out_dir: str | Path = 
     sc = load_scenario(scenario, over)
     geo = resolve_geometry(sc)
     md = build_mesh(geo.spec, comm)
-    pb = build_problem(sc, geo, md, preset="fieldsplit_pier")
+    check_available(preset, "bench floors --presets")
+    pb = build_problem(sc, geo, md, preset=preset)
     stages = [st for st in solver_stages(sc) if st.kind in ("geostatic", "load")][:2]
 
     def stop(_pb: Any, _t: float, stage: str) -> None:
@@ -261,7 +309,7 @@ def bench_floors(scenario: str, sets: Sequence[str] = (), out_dir: str | Path = 
     rows = measure_floors(pb, repeats, with_lu)
     if comm.rank == 0:
         head = (f"{time.strftime('%Y-%m-%d')}, {platform.node()}, {comm.size} MPI ranks, "
-                f"{scenario}, {pb.num_dofs} unknowns, symmetry {geo.symmetry}"
+                f"{scenario}, {pb.num_dofs} unknowns, symmetry {geo.symmetry}, {preset}"
                 + "".join(f"; --set {kv}" for kv in sets))
         write_table(Path(out_dir), "bench_floors", rows, COLUMNS, head)
     return rows

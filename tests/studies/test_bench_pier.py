@@ -51,3 +51,23 @@ def test_one_scenario_still_a_string(what, monkeypatch):
     monkeypatch.setattr(pb, "bench_presets", fake)
     assert main(["bench", what, "--scenario", "single_pile", "--presets", "direct"]) == 0
     assert seen["scenario"] == "single_pile"
+
+
+def test_presets_default_and_floors_takes_one_preset(monkeypatch, capsys):
+    """``bench presets`` compares its default presets unless told; ``bench floors`` measures one
+    field-split preset: two are refused in one line, before anything is built."""
+    seen = {}
+
+    def fake(presets, scenario, *a, **k):
+        seen["presets"] = presets
+        return [{"status": "complete"}]
+
+    import pilegroup.studies.bench.preset_bench as pb
+    monkeypatch.setattr(pb, "bench_presets", fake)
+    assert main(["bench", "presets", "--scenario", "single_pile"]) == 0
+    assert seen["presets"] == ["direct_reuse", "fieldsplit_kept"]
+    two = ["fieldsplit_pier", "fieldsplit_kept"]
+    assert main(["bench", "floors", "--presets", *two]) == EXIT_INPUT
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1
+    assert "bench floors --presets = 'fieldsplit_pier fieldsplit_kept'" in err

@@ -5,6 +5,7 @@ import json
 import pytest
 from mpi4py import MPI
 
+from pilegroup.errors import ScenarioError
 from pilegroup.studies.bench.solver_floors import bench_floors, machine_rates, mumps_count
 
 
@@ -23,7 +24,8 @@ def test_machine_rates_are_those_of_a_computer():
 
 def test_floors_table_on_the_small_pile(tmp_path, small_pile, monkeypatch):
     """Every MatMult row and the kept LU's solve carry a floor, positive and (out of cache, or
-    not) within a factor 100 of the measured time; the machine rows carry their rates."""
+    not) within a factor 100 of the measured time; the machine rows carry their rates; the
+    split's own solve and its two iteration floors (blocks by LU) converge."""
     monkeypatch.setenv("PILEGROUP_MESH_CACHE", str(tmp_path / "cache"))
     rows = bench_floors(small_pile, out_dir=tmp_path / "floors", repeats=2)
     by = {r["piece"]: r for r in rows}
@@ -36,6 +38,12 @@ def test_floors_table_on_the_small_pile(tmp_path, small_pile, monkeypatch):
         assert 0.0 < r["floor_s"] < 100.0 * max(r["apply_s"], 1e-5), r
     lu = by["direct_reuse: block low-rank LU factorisation / one solve"]
     assert "factor entries" in lu["rate"]
+    own = by["fieldsplit_pier: FGMRES solve (kept set-up)"]
+    exact = by["fieldsplit_pier: FGMRES, every block by LU"]
+    fixed_stress = by["fieldsplit_gamg: FGMRES, displacement and pressure blocks by LU "
+                      "(the fixed-stress floor)"]
+    for r in (own, exact, fixed_stress):
+        assert r["rate"] == "converged" and r["iterations"] >= 1, r
     if MPI.COMM_WORLD.rank == 0:
         saved = json.loads((tmp_path / "floors" / "bench_floors.json").read_text())
         assert [r["piece"] for r in saved] == [r["piece"] for r in rows]
@@ -44,3 +52,9 @@ def test_floors_table_on_the_small_pile(tmp_path, small_pile, monkeypatch):
 @pytest.mark.mpi
 def test_floors_under_mpirun(rerun_under_mpirun):
     rerun_under_mpirun(__file__, ranks=2, timeout=300)
+
+
+def test_floors_refuse_a_preset_without_blocks(small_pile):
+    """Only a field-split preset has blocks to time: another is refused before meshing."""
+    with pytest.raises(ScenarioError, match="bench floors --presets = 'direct_reuse'"):
+        bench_floors(small_pile, preset="direct_reuse")
