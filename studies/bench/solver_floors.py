@@ -1,8 +1,8 @@
 """The cost of each piece of a linear solve on a scenario's own Jacobian: the floors.
 
 ``mpirun -n R pilegroup bench floors SCENARIO [--set KEY=VALUE ...]`` builds the scenario's mesh
-and problem, runs its geostatic stage and the first step of its first load stage, assembles the
-Jacobian there (with the fixed-stress preconditioning matrix) and times, on the ranks of the
+and problem, runs its geostatic stage and the first two steps of its first load stage, assembles
+the Jacobian there (with the fixed-stress preconditioning matrix) and times, on the ranks of the
 run, every piece a Newton solve is made of:
 
 * a matrix–vector product with the whole Jacobian and with each field-split block;
@@ -10,14 +10,16 @@ run, every piece a Newton solve is made of:
   ``--presets NAME``, e.g. ``fieldsplit_hypre`` where PETSc has hypre) on its own: set-up (LU
   factorisation, AMG hierarchy) and one application (triangular solves, one V-cycle), with the
   options the preset gives that block;
-* the whole field-split preconditioner: set-up and one application, and the FGMRES solve of a
-  random right-hand side to the preset's tolerance (iterations, time);
+* the whole field-split preconditioner: set-up and one application, and the FGMRES solve to the
+  preset's tolerance (iterations, time) of ``A d = b``, ``d`` the second load step's increment
+  (smooth, as a Newton correction is; a random ``d`` is far easier for a split);
 * the iteration floors: the same FGMRES solve with every block of the split solved exactly
   (MUMPS LU in double precision), and with the two-block displacement–pressure split of the
   fixed-stress scheme solved exactly: the iterations that no better block preconditioner goes
   below, the first from the blocks' coupling (the displacement split between structure and
   soil, the band's width), the second from the fixed-stress splitting alone;
-* the kept LU of ``direct_reuse``: one factorisation and one solve with it;
+* the kept LU of ``direct_reuse``: one factorisation and one solve with it, and its FGMRES
+  iterations on the same ``A d = b``;
 * the machine's own floors, every rank at once: the memory bandwidth of a streaming pass
   (numpy, single precision) and the single-precision matrix product's rate (numpy's BLAS, one
   thread per rank as in a run). From them the ``floor_s`` of a matrix–vector product (its
@@ -61,8 +63,8 @@ EXACT_BLOCK = {"ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_solver_typ
                "pc_precision": "double"}
 
 
-class _FirstLoadStep(Exception):
-    """Raised by the step callback once the first load step is done (stops the run there)."""
+class _SecondLoadStep(Exception):
+    """Raised by the step callback once the second load step is done (stops the run there)."""
 
 
 def _timed(comm: MPI.Comm, fn: Callable[[], Any], repeats: int = 1) -> float:
@@ -166,11 +168,14 @@ def _block_rows(comm: MPI.Comm, A: PETSc.Mat, P: PETSc.Mat, splits: list,
     return rows
 
 
-def measure_floors(pb: Any, repeats: int = 5, with_lu: bool = True) -> list[dict[str, Any]]:
+def measure_floors(pb: Any, repeats: int = 5, with_lu: bool = True,
+                   solution: PETSc.Vec | None = None) -> list[dict[str, Any]]:
     """The rows of the floor table on the current Jacobian of problem ``pb``.
 
     ``pb``: a :class:`~pilegroup.solver.problem.BiotProblem` built with the field-split preset
-    measured (collective).
+    measured. The FGMRES solves have the right-hand side ``A solution``: ``solution`` is a
+    step's increment (smooth, as a Newton correction is: random vectors are far easier for a
+    split), or a random vector where none is given (collective).
     """
     comm = pb.comm
     rows, bandwidth = _machine_rows(comm)
@@ -196,7 +201,7 @@ def measure_floors(pb: Any, repeats: int = 5, with_lu: bool = True) -> list[dict
     apply = _timed(comm, lambda: pc.apply(x, y), repeats)
     rows.append(_row(f"{name}: set-up / one application", A, first_apply - apply, apply))
     b = x.duplicate()
-    A.mult(x, b)
+    A.mult(x if solution is None else solution, b)
     y.set(0.0)
     pc.setReusePreconditioner(True)
     solve = _timed(comm, lambda: ksp.solve(b, y))
@@ -204,7 +209,7 @@ def measure_floors(pb: Any, repeats: int = 5, with_lu: bool = True) -> list[dict
                      ksp.getIterationNumber(), rate=_reason(ksp)))
     rows += _iteration_floors(pb, A, P, b, y, band)
     if with_lu:
-        rows.append(_lu_row(comm, A, x, y, repeats, bandwidth))
+        rows.append(_lu_row(comm, A, x, y, repeats, bandwidth, b))
     return rows
 
 
@@ -241,8 +246,10 @@ def _iteration_floors(pb: Any, A: PETSc.Mat, P: PETSc.Mat, b: PETSc.Vec, y: PETS
 
 
 def _lu_row(comm: MPI.Comm, A: PETSc.Mat, x: PETSc.Vec, y: PETSc.Vec,
-            repeats: int, bandwidth: float) -> dict[str, Any]:
+            repeats: int, bandwidth: float, b: PETSc.Vec) -> dict[str, Any]:
     """One factorisation of ``A`` with the options of ``direct_reuse`` and one solve with it.
+
+    The row's iterations: those of the preset's FGMRES solve of ``A y = b`` with that LU.
 
     The solve's floor reads the largest rank's share of the effective (compressed) factor
     entries once, 4 bytes each in single precision (the preset's, where this PETSc's MUMPS has
@@ -254,23 +261,26 @@ def _lu_row(comm: MPI.Comm, A: PETSc.Mat, x: PETSc.Vec, y: PETSc.Vec,
     pc = ksp.getPC()
     set_up = _timed(comm, pc.setUp)
     apply = _timed(comm, lambda: pc.apply(x, y), repeats)
+    y.set(0.0)
+    ksp.solve(b, y)
+    its = ksp.getIterationNumber()
     F = pc.getFactorMatrix()
     effective = mumps_count(F.getMumpsInfog(35))
     local = mumps_count(F.getMumpsInfo(27))
     share = comm.allreduce(local, op=MPI.MAX) / max(comm.allreduce(local), 1.0)
     ksp.destroy()
     return _row("direct_reuse: block low-rank LU factorisation / one solve", A, set_up, apply,
-                floor=effective * share * word / bandwidth,
+                its, floor=effective * share * word / bandwidth,
                 rate=f"{effective:.3g} factor entries, {share:.0%} on the largest rank")
 
 
 def bench_floors(scenario: str, sets: Sequence[str] = (), out_dir: str | Path = "out/bench_floors",
                  mesh_size: float | None = None, repeats: int = 5,
                  with_lu: bool = True, preset: str = "fieldsplit_pier") -> list[dict[str, Any]]:
-    """Time the pieces of a linear solve at the first load step of ``scenario``.
+    """Time the pieces of a linear solve at the second load step of ``scenario``.
 
     Builds the scenario (with ``--set`` overrides ``sets``) with the field-split preset
-    ``preset``, solves its geostatic stage and first load step, then prints and writes the
+    ``preset``, solves its geostatic stage and first two load steps, then prints and writes the
     table (collective).
     """
     from pilegroup.geometry.adapter import resolve_geometry
@@ -292,21 +302,28 @@ def bench_floors(scenario: str, sets: Sequence[str] = (), out_dir: str | Path = 
         over["numerics.mesh.size_m"] = mesh_size
     sc = load_scenario(scenario, over)
     geo = resolve_geometry(sc)
-    md = build_mesh(geo.spec, comm)
     check_available(preset, "bench floors --presets")
+    md = build_mesh(geo.spec, comm)
     pb = build_problem(sc, geo, md, preset=preset)
     stages = [st for st in solver_stages(sc) if st.kind in ("geostatic", "load")][:2]
 
+    before, after = pb.x.duplicate(), pb.x.duplicate()
+    load_steps = [0]
+
     def stop(_pb: Any, _t: float, stage: str) -> None:
-        if stage == stages[-1].name:
-            raise _FirstLoadStep
+        after.copy(before)
+        pb.layout.fields_to_x(after)
+        load_steps[0] += stage == stages[-1].name
+        if load_steps[0] == 2:
+            raise _SecondLoadStep
 
     try:
         run_stages(pb, stages, time_stepping(sc), on_step=stop, geostatic_tol=GEOSTATIC_TOL_M,
                    t_start=sc.time.start_day)
-    except _FirstLoadStep:
+    except _SecondLoadStep:
         pass
-    rows = measure_floors(pb, repeats, with_lu)
+    after.axpy(-1.0, before)  # the second load step's increment
+    rows = measure_floors(pb, repeats, with_lu, solution=after)
     if comm.rank == 0:
         head = (f"{time.strftime('%Y-%m-%d')}, {platform.node()}, {comm.size} MPI ranks, "
                 f"{scenario}, {pb.num_dofs} unknowns, symmetry {geo.symmetry}, {preset}"
