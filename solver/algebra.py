@@ -21,6 +21,7 @@ from dolfinx.fem import petsc as fpetsc
 from mpi4py import MPI
 from petsc4py import PETSc
 
+from pilegroup.solver.forms import CHANGED_TAG
 from pilegroup.solver.layout import Body
 from pilegroup.solver.linsolve import KSPSolver
 
@@ -49,7 +50,6 @@ class MonolithicAlgebra:
         # the kept part was updated cell by cell since it was built; it is to be built whole
         self._kept_updated = False
         self._rebuild_kept = False
-        self._tag_of: np.ndarray | None = None  # cell tag of each parent cell
         self._row_weights: PETSc.Vec | None = None  # inexact Newton's block weights
 
     def dirichlet_response(self, bcs: list[fem.DirichletBC], out: PETSc.Vec) -> None:
@@ -189,19 +189,14 @@ class MonolithicAlgebra:
         self._kept_updated = True
 
     def _on_cells(self, b: Body, compiled: fem.CompiledForm, cells: np.ndarray) -> fem.Form:
-        """The compiled cell form of body ``b`` over its (body mesh) ``cells`` only."""
+        """The compiled tangent form of body ``b`` over its (body mesh) ``cells`` only.
+
+        The form integrates over the subdomain ``forms.CHANGED_TAG``, which these cells (as
+        parent-mesh cells) make up.
+        """
         parent = cells if b.emap is None else \
             b.emap.sub_topology_to_topology(cells, inverse=False)
-        parent = np.sort(parent).astype(np.int32)
-        ufcx = compiled.ufcx_form
-        k = fem.IntegralType.cell.value
-        ids = [ufcx.form_integral_ids[j] for j in range(ufcx.form_integral_offsets[k],
-                                                           ufcx.form_integral_offsets[k + 1])]
-        if self._tag_of is None:
-            tags, imap = self.layout.md.cell_tags, self.layout.mesh.topology.index_map(3)
-            self._tag_of = np.full(imap.size_local + imap.num_ghosts, -1)
-            self._tag_of[tags.indices] = tags.values
-        domains = [(i, parent if i == -1 else parent[self._tag_of[parent] == i]) for i in ids]
+        domains = [(CHANGED_TAG, np.sort(parent).astype(np.int32))]
         form = compiled.ufl_form
         return fem.create_form(compiled, [b.V, b.V], self.layout.mesh,
                                {fem.IntegralType.cell: domains},

@@ -47,6 +47,10 @@ from pilegroup.solver.layout import BlockLayout, Body, eps_mandel
 Form = ufl.Form | None
 #: A cell tag no cell carries (the measure of the empty padding terms, ``pad_parts``).
 EMPTY_TAG = 2**31 - 2
+#: The subdomain id of a body's tangent term over the cells whose tangent changed: the cells are
+#: given to the form at each assembly (``MonolithicAlgebra._update_kept``). Not ``dx``'s default
+#: id: DOLFINx integrates a default integral over every cell whatever cells it is given.
+CHANGED_TAG = 2**31 - 3
 
 
 @dataclass
@@ -233,11 +237,16 @@ class FormBuilder:
         self.forms.pad_diagonal(empty)
         return empty
 
-    def tangent(self, b: Body) -> ufl.Form:
-        """``int (C_t : eps(du)) : eps(v)`` of body ``b`` (its tangent stiffness)."""
+    def tangent(self, b: Body, changed: bool = False) -> ufl.Form:
+        """``int (C_t : eps(du)) : eps(v)`` of body ``b`` (its tangent stiffness).
+
+        ``changed``: over the subdomain :data:`CHANGED_TAG` (the cells given at assembly)
+        instead of the body's cells.
+        """
         i = self.layout.bodies.index(b)
+        dx = self.dx_all(CHANGED_TAG) if changed else self.dx_body(b)
         return ufl.inner(ufl.dot(b.qp.tangent, eps_mandel(self.trials[i])),
-                         eps_mandel(self.tests[i])) * self.dx_body(b)
+                         eps_mandel(self.tests[i])) * dx
 
     def momentum(self, self_weight: bool) -> None:
         """Effective stress, buoyant weight and the pore-pressure coupling ``-p div v``."""

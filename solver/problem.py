@@ -194,8 +194,8 @@ class BiotProblem(MonolithicAlgebra):
         self._J_kept_forms = compile_(fb.forms.J_kept)
         self._J_each_forms = compile_(fb.forms.J_each)
         # each body's tangent term, to be integrated over the cells whose tangent changed
-        self._tangent_forms = [fem.compile_form(self.comm, fb.tangent(b), jit_options=jo)
-                               for b in self.bodies]
+        self._tangent_forms = [fem.compile_form(self.comm, fb.tangent(b, changed=True),
+                                                jit_options=jo) for b in self.bodies]
         self._empty_forms = [compile_(e) for e in empty]
         self._F_u_forms = [compile_(fb.forms.F[self.layout.block_of(b)]) for b in self.bodies]
         self._Fint_forms = [compile_(fb.internal_force(b)) for b in self.bodies]

@@ -222,7 +222,7 @@ def _whole_matrix(pb):
     B.zeroEntries()
     fpetsc.assemble_matrix(B, pb.J_forms, bcs=bcs, diag=1.0)
     B.assemble()
-    if pb.interface.has_matrix:  # the Gauss tangent is not in the forms
+    if pb.interface is not None and pb.interface.has_matrix:  # the Gauss tangent: not in J
         A, pb.A = pb.A, B
         try:
             pb._add_interface_matrix(bcs)
@@ -335,3 +335,31 @@ def test_a_shaft_factor_off_a_circle_over_its_polygon_is_refused(factor):
 @pytest.mark.mpi
 def test_interface_gauss_under_mpirun(rerun_under_mpirun):
     rerun_under_mpirun(__file__, timeout=600)  # a dead rank ends the test, never hangs CI
+
+
+@pytest.mark.parametrize("pair", ["Q1Q1", "Q2Q1"])
+def test_jacobian_in_parts_with_one_body(pair):
+    """One body on the whole mesh (soil alone, or piles tied to it): a tangent change in some
+    cells goes into the kept part over those cells only, as with separate bodies (its term
+    over every cell, added at each change, made Newton linear: the strip footing stalled)."""
+    from pilegroup.constitutive.soil import MohrCoulomb
+    from pilegroup.geometry.box import build_box
+    from pilegroup.studies.verification.common import DRAINED, box_bcs, soil_problem
+
+    md = build_box(MPI.COMM_WORLD, (0.0, 2.0), (0.0, 0.5), np.linspace(-2.0, 0.0, 5), 4, 1)
+    soil = SoilMaterial(MohrCoulomb(E=1e4, nu=0.3, c=10.0, phi_deg=0.0, psi_deg=0.0), 1e-3, 0.4)
+    pb = soil_problem(md, soil, Discretisation(pair=pair), box_bcs((2,)), pressure_bcs=DRAINED)
+    pb.set_step(1.0, 1.0)
+    pb.evaluate_laws()
+    pb.assemble_jacobian()
+    assert _matrix_error(pb) < 1e-14
+    qp = pb.bodies[0].qp
+    rng = np.random.default_rng(5 + MPI.COMM_WORLD.rank)
+    for _ in range(3):  # three changes in a row, each in about a third of the cells
+        for g in qp.groups:
+            t = qp.tangent.x.array.reshape(-1, 36)[g.dofs].reshape(-1, qp.nqp, 36)
+            t[rng.random(len(g.cells)) < 0.3] *= 1.5
+            qp._write(g, qp.stress.x.array.reshape(-1, 6)[g.dofs], t.reshape(-1, 36))
+        assert MPI.COMM_WORLD.allreduce(qp.tangent_changes()[0].size, op=MPI.SUM) > 0
+        pb.assemble_jacobian()
+        assert _matrix_error(pb) < 1e-14
