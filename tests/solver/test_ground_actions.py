@@ -253,3 +253,22 @@ def test_drained_layer_halves_the_drainage_path(T):
     p = pb.layout.p.x.array
     z = pb.layout.Q.tabulate_dof_coordinates()[:, 2]
     assert np.all(p[z < -H - 1e-9] == 0.0)  # the aquifer holds the water table's pressure
+
+
+def test_installation_in_the_pier_on_its_default_mesh_builds(tmp_path, monkeypatch):
+    """Pier 667 with installation pore pressures on its defaults (Q2-Q1, quarter): the
+    interface's in-situ normal traction at the ground surface, where sigma'_v and the excess
+    both vanish, is 0, not a round-off tension the interface law refuses."""
+    from mpi4py import MPI
+
+    from pilegroup.geometry.adapter import resolve_geometry
+    from pilegroup.geometry.convert import build_mesh
+    from pilegroup.model.loader import load_scenario
+    from pilegroup.studies.run.pipeline import build_problem
+
+    monkeypatch.setenv("PILEGROUP_MESH_CACHE", str(tmp_path / "cache"))
+    sc = load_scenario("pier667", {"piles.installation.excess_pore_pressure_ratio": 0.15,
+                                   "piles.installation.radius_ratio": 5.0})
+    geo = resolve_geometry(sc)
+    pb = build_problem(sc, geo, build_mesh(geo.spec, MPI.COMM_WORLD))
+    assert pb.has_initial_excess and pb.interface is not None
