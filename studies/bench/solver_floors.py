@@ -207,7 +207,7 @@ def measure_floors(pb: Any, repeats: int = 5, with_lu: bool = True,
     solve = _timed(comm, lambda: ksp.solve(b, y))
     rows.append(_row(f"{name}: FGMRES solve (kept set-up)", A, None, solve,
                      ksp.getIterationNumber(), rate=_reason(ksp)))
-    rows += _iteration_floors(pb, A, P, b, y, band)
+    rows += _iteration_floors(pb, A, P, b, y, splits)
     if with_lu:
         rows.append(_lu_row(comm, A, x, y, repeats, bandwidth, b))
     return rows
@@ -219,23 +219,24 @@ def _reason(ksp: PETSc.KSP) -> str:
 
 
 def _iteration_floors(pb: Any, A: PETSc.Mat, P: PETSc.Mat, b: PETSc.Vec, y: PETSc.Vec,
-                      band: int) -> list[dict[str, Any]]:
+                      splits: list) -> list[dict[str, Any]]:
     """FGMRES solves of ``A y = b`` with the blocks of a split solved exactly (:data:`EXACT_BLOCK`).
 
-    The split measured (its blocks, order and band) and the two-block displacement–pressure
+    The split measured (its index sets ``splits``) and the two-block displacement–pressure
     split of ``fieldsplit_gamg`` (fixed-stress), each to the measured preset's tolerance.
     """
     comm, measured = pb.comm, pb.linear_solver.spec
     tol = {"ksp_rtol": merged_options(measured.name)["ksp_rtol"], "ksp_max_it": 400,
            "ksp_gmres_restart": 400}
+    u_p = get_preset("fieldsplit_gamg").splits
     rows = []
-    for name, what in ((measured.name, "every block by LU"),
-                       ("fieldsplit_gamg", "displacement and pressure blocks by LU "
-                                           "(the fixed-stress floor)")):
-        spec = get_preset(name)
-        exact = {f"fieldsplit_{blk}_{k}": v for blk in spec.splits for k, v in EXACT_BLOCK.items()}
-        ksp = create_ksp(comm, A, P, "floor_exact_", name, {**exact, **tol},
-                         pb.layout.splits(A, spec.splits, band))
+    for name, what, sets in (
+            (measured.name, "every block by LU", splits),
+            ("fieldsplit_gamg", "displacement and pressure blocks by LU (the fixed-stress floor)",
+             pb.layout.splits(A, u_p))):
+        exact = {f"fieldsplit_{blk}_{k}": v for blk in get_preset(name).splits
+                 for k, v in EXACT_BLOCK.items()}
+        ksp = create_ksp(comm, A, P, "floor_exact_", name, {**exact, **tol}, sets)
         y.set(0.0)
         solve = _timed(comm, lambda ksp=ksp: ksp.solve(b, y))
         rows.append(_row(f"{name}: FGMRES, {what}", A, None, solve, ksp.getIterationNumber(),
