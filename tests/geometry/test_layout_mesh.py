@@ -27,7 +27,7 @@ import pytest
 from mpi4py import MPI
 
 from pilegroup.errors import ScenarioError
-from pilegroup.geometry import groups
+from pilegroup.geometry import groups, plan
 from pilegroup.geometry import spec as gs
 from pilegroup.geometry.adapter import resolve_geometry
 from pilegroup.geometry.convert import build_mesh
@@ -179,3 +179,19 @@ def test_cell_edge_shares_the_gap_in_proportion_to_the_radii():
     assert md.info["min_sj"] > 0.2
     with pytest.raises(ScenarioError, match="structured cell edge"):
         cell_grid(_pair(0.85))  # a 0.05 m gap: less than 0.2 x the radii
+
+
+def test_off_centre_pile_gets_its_cell_side_graded_where_the_ring_folds():
+    """A pile 1.05 m from its cell's left side and 3.05 m from its top, one radial layer, two
+    edges a side: evenly divided, the left side's middle node lies 1 m above the pile's arc
+    node facing it across a 0.35 m ring (a fold); graded, that node faces the pile. A pile in
+    the middle of its cell is left alone (its sides stay even)."""
+    centre, r = (0.0, 0.0), 0.7
+    top_left, bottom_left = (-1.05, 3.05), (-1.05, -1.05)  # side k = 1, corner 1 to corner 2
+    ring = ((*centre, r), 1)
+    assert plan._ring_folds(*ring, (top_left, bottom_left, 2, 1.0), (1, 1.0))
+    c = plan._side_grading(centre, top_left, bottom_left, 2)
+    middle = plan._fractions(2, c)[1]
+    assert top_left[1] + middle * (bottom_left[1] - top_left[1]) == pytest.approx(0.0, abs=1e-12)
+    assert not plan._ring_folds(*ring, (top_left, bottom_left, 2, c), (1, 1.0))
+    assert not plan._ring_folds(*ring, ((-2.0, 2.0), (-2.0, -2.0), 2, 1.0), (1, 1.0))

@@ -145,6 +145,13 @@ FAR_FIELD_REFUSED = Layout(
              32.5, 40.0, 10.0, 42.5, 40.0, 47.5, 32.5, 22.5),
     symmetry="none", mesh=(("scale", 2.5), ("n_circ_min", 28)))
 
+#: An outer pile 1.05 m from the cap's edges and 3.05 m from its cell's far side, one radial
+#: layer (h = 7 m) across the 0.35 m ring: evenly divided cell sides put the node facing the
+#: pile's arc 1 m along the side and folded the ring ("14 degenerate or inverted cells"); the
+#: side is now graded so that node faces the pile (geometry/plan.py, ``pile_cell``).
+RING_FOLDED = Layout(6, 6, 1.4, (2.51, 4.36), (0.25, 0.25, 0.25, 1.4), 10.0, diameters=(),
+                     lengths=(), symmetry="auto", mesh=(("scale", 4.0),))
+
 
 def _per_pile(draw, nx: int, ny: int, mode: str, values: st.SearchStrategy) -> tuple:
     """Per-pile values: () (all alike), one per mirror class, or one per pile."""
@@ -255,9 +262,15 @@ def test_layout_whose_far_field_was_refused_meshes():
     assert mesh_or_refusal(FAR_FIELD_REFUSED) is not None
 
 
+def test_layout_with_an_off_centre_outer_pile_meshes():
+    out = mesh_or_refusal(RING_FOLDED)
+    assert out is not None and out["symmetry"] == "half_x" and out["piles"] == 18
+
+
 @pytest.mark.slow
 @settings(max_examples=60, **COMMON)
 @example(lay=PIER667_5X5)
+@example(lay=RING_FOLDED)
 @example(lay=MIXED)
 @given(lay=layouts())
 def test_layouts_mesh_or_are_refused(lay):
