@@ -31,6 +31,7 @@ import gmsh
 import numpy as np
 
 from pilegroup.errors import ScenarioError
+from pilegroup.geometry.ring import fractions, ring_folds, side_grading
 from pilegroup.geometry.spec import GeometrySpec, PileSpec
 from pilegroup.model.mesh_estimate import edges_around
 
@@ -250,6 +251,24 @@ class PlanView:
         if pin or not c.pinned:
             c.coef, c.pinned = coef, c.pinned or pin
 
+    def grade_side(self, side: int, k: int, pile: tuple[float, float, float],
+                   radial: tuple[int, int | float]) -> None:
+        """Grade o-grid cell side ``side`` (from corner ``k`` to ``k + 1``) if its ring folds.
+
+        ``pile``: centre x, y and meshed radius (m); ``radial``: edge count and ratio from the
+        circle to the side. Evenly divided, the soil blocks between the pile's arc ``k`` and
+        the side may fold (:func:`~pilegroup.geometry.ring.ring_folds`); the side is then
+        graded so that its middle node faces the pile (:func:`~pilegroup.geometry.ring.
+        side_grading`) and keeps that grading when the neighbouring cell sets it again.
+        """
+        c = self.curves[abs(side)]
+        a, b = self.xy(c.p), self.xy(c.q)
+        if side < 0:
+            a, b = b, a
+        if ring_folds(pile, k, (a, b, c.n, 1.0), radial):
+            ratio = side_grading(pile[:2], a, b, c.n)
+            self.edges(side, c.n, ratio if side > 0 else 1.0 / ratio, pin=True)
+
     def block(self, curves: list[int], corners: list[int], pile: int | None,
               in_region: bool = True) -> None:
         """A transfinite, recombined surface bounded by ``curves`` with the 4 ``corners``.
@@ -278,7 +297,7 @@ class PlanView:
                 raise ValueError(f"curve {curve} is not a straight line")
             (xp, yp), (xq, yq) = self.coords[c.p], self.coords[c.q]
             pts = [c.p, *(self.point_at(xp + f * (xq - xp), yp + f * (yq - yp))
-                          for f in _fractions(c.n, c.coef)[1:-1]), c.q]
+                          for f in fractions(c.n, c.coef)[1:-1]), c.q]
             chain = [self.line(a, b) for a, b in zip(pts[:-1], pts[1:], strict=True)]
             for t in chain:
                 self.edges(t, 1)
@@ -396,59 +415,6 @@ def radial_edges(spec: GeometrySpec, p: PileSpec, corners: list[tuple[float, flo
     return m_in, m_out, coef
 
 
-#: Smallest corner sine (cross product of unit edges) of a soil quadrilateral of an o-grid ring
-#: below which the ring counts as folded: its cell side is then graded (:func:`pile_cell`).
-MIN_CORNER_SINE = 0.1
-
-
-def _fractions(n: int, coef: float) -> np.ndarray:
-    """Node positions (0..1) of ``n`` edges growing by ``coef`` (gmsh's "Progression")."""
-    if abs(coef - 1.0) < 1e-12:
-        return np.linspace(0.0, 1.0, n + 1)
-    return (1.0 - coef ** np.arange(n + 1)) / (1.0 - coef ** n)
-
-
-def _side_grading(centre: tuple[float, float], a: tuple[float, float], b: tuple[float, float],
-                  nq: int) -> float:
-    """Ratio of the ``nq`` edges from ``a`` to ``b`` whose middle is the pile centre's projection.
-
-    With ratio ``c`` the middle of ``2 m`` edges lies at ``1 / (1 + c^m)`` of the side, so the
-    node facing the pile's arc midpoint sits on the ray from the centre at right angles to the
-    side (for odd ``nq`` the same formula centres the distribution there).
-    """
-    d = np.subtract(b, a)
-    s = float(np.dot(np.subtract(centre, a), d) / np.dot(d, d))
-    s = min(max(s, 0.05), 0.95)
-    return ((1.0 - s) / s) ** (2.0 / nq)
-
-
-def _ring_folds(pile: tuple[float, float, float], k: int,
-                side: tuple[tuple[float, float], tuple[float, float], int, float],
-                radial: tuple[int, float]) -> bool:
-    """Whether the soil quadrilaterals between arc ``k`` of a pile and its cell side fold.
-
-    ``pile``: centre x, y and meshed radius (m); ``side``: corners ``a``, ``b`` (corner ``k``
-    and ``k + 1``), edge count and ratio along it; ``radial``: edge count and ratio from the
-    circle outwards. The block's nodes are taken on the straight lines joining each arc node
-    to its side node (the transfinite block's rows); a corner sine below
-    :data:`MIN_CORNER_SINE` (or a negative one: an inverted cell) is a fold.
-    """
-    (px, py, r), (a, b, nq, side_coef), (m_out, coef) = pile, side, radial
-    ang = math.pi / 4 + k * math.pi / 2 + (math.pi / 2) * np.arange(nq + 1) / nq
-    arc = np.column_stack([px + r * np.cos(ang), py + r * np.sin(ang)])
-    f = _fractions(nq, side_coef)[:, None]
-    outer = np.asarray(a) + f * (np.subtract(b, a))
-    t = _fractions(m_out, coef)[:, None, None]
-    nodes = arc[None] + t * (outer - arc)[None]  # (layer, node along the side, xy)
-    # every quadrilateral counter-clockwise: outer j, outer j + 1, inner j + 1, inner j
-    quad = np.stack([nodes[1:, :-1], nodes[1:, 1:], nodes[:-1, 1:], nodes[:-1, :-1]], axis=2)
-    e_next = np.roll(quad, -1, axis=2) - quad
-    e_prev = np.roll(quad, 1, axis=2) - quad
-    cross = e_next[..., 0] * e_prev[..., 1] - e_next[..., 1] * e_prev[..., 0]
-    norm = np.linalg.norm(e_next, axis=-1) * np.linalg.norm(e_prev, axis=-1)
-    return bool(np.min(cross / np.maximum(norm, 1e-300)) < MIN_CORNER_SINE)
-
-
 def pile_cell(pv: PlanView, spec: GeometrySpec, i: int, g: list[int], sides: list[int],
                n_circ: int) -> None:
     """The o-grid of the cell with corners ``g`` and sides ``sides`` around pile ``i`` (0-based).
@@ -469,10 +435,7 @@ def pile_cell(pv: PlanView, spec: GeometrySpec, i: int, g: list[int], sides: lis
     diags = [pv.line(q[k], g[k]) for k in range(4)]
     m_in, m_out, coef = radial_edges(spec, p, [pv.xy(t) for t in g], n_circ)
     for k in range(4):
-        a, b = pv.xy(g[k]), pv.xy(g[(k + 1) % 4])
-        if _ring_folds((p.x, p.y, r), k, (a, b, nq, 1.0), (m_out, coef)):
-            side = _side_grading((p.x, p.y), a, b, nq)
-            pv.edges(sides[k], nq, side if sides[k] > 0 else 1.0 / side, pin=True)
+        pv.grade_side(sides[k], k, (p.x, p.y, r), (m_out, coef))
     for k in range(4):
         pv.edges(arcs[k], nq)
         pv.edges(sq_sides[k], nq)

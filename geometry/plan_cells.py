@@ -147,6 +147,7 @@ class _CutPile:
                      [pv.line(ra[2], rb[2])]]
             for path in paths:
                 pv.edges(path[0], nq)
+            pv.grade_side(paths[2][0], k, (self.cx, self.cy, self.r), (self.m_out, self.coef))
         else:
             corner = k if half == 0 else k1
             rc, rm = self.radial(corner, False), self.radial(k, True)

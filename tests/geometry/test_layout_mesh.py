@@ -27,7 +27,7 @@ import pytest
 from mpi4py import MPI
 
 from pilegroup.errors import ScenarioError
-from pilegroup.geometry import groups, plan
+from pilegroup.geometry import groups, ring
 from pilegroup.geometry import spec as gs
 from pilegroup.geometry.adapter import resolve_geometry
 from pilegroup.geometry.convert import build_mesh
@@ -188,10 +188,10 @@ def test_off_centre_pile_gets_its_cell_side_graded_where_the_ring_folds():
     the middle of its cell is left alone (its sides stay even)."""
     centre, r = (0.0, 0.0), 0.7
     top_left, bottom_left = (-1.05, 3.05), (-1.05, -1.05)  # side k = 1, corner 1 to corner 2
-    ring = ((*centre, r), 1)
-    assert plan._ring_folds(*ring, (top_left, bottom_left, 2, 1.0), (1, 1.0))
-    c = plan._side_grading(centre, top_left, bottom_left, 2)
-    middle = plan._fractions(2, c)[1]
+    pile = ((*centre, r), 1)
+    assert ring.ring_folds(*pile, (top_left, bottom_left, 2, 1.0), (1, 1.0))
+    c = ring.side_grading(centre, top_left, bottom_left, 2)
+    middle = ring.fractions(2, c)[1]
     assert top_left[1] + middle * (bottom_left[1] - top_left[1]) == pytest.approx(0.0, abs=1e-12)
-    assert not plan._ring_folds(*ring, (top_left, bottom_left, 2, c), (1, 1.0))
-    assert not plan._ring_folds(*ring, ((-2.0, 2.0), (-2.0, -2.0), 2, 1.0), (1, 1.0))
+    assert not ring.ring_folds(*pile, (top_left, bottom_left, 2, c), (1, 1.0))
+    assert not ring.ring_folds(*pile, ((-2.0, 2.0), (-2.0, -2.0), 2, 1.0), (1, 1.0))
