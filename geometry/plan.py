@@ -244,7 +244,7 @@ class PlanView:
         """Mesh ``curve`` with ``n_edges`` edges (geometric ratio ``coef`` along its direction).
 
         ``pin``: this ``coef`` stays when the curve's edges are set again (a cell side graded
-        for its pile, :func:`pile_cell`, is set again by the cell on its other side).
+        by :meth:`grade_side` is set again by the cell on its other side).
         """
         c = self.curves[abs(curve)]
         c.n = n_edges
@@ -252,7 +252,7 @@ class PlanView:
             c.coef, c.pinned = coef, c.pinned or pin
 
     def grade_side(self, side: int, k: int, pile: tuple[float, float, float],
-                   radial: tuple[int, int | float]) -> None:
+                   radial: tuple[int, float]) -> None:
         """Grade o-grid cell side ``side`` (from corner ``k`` to ``k + 1``) if its ring folds.
 
         ``pile``: centre x, y and meshed radius (m); ``radial``: edge count and ratio from the

@@ -15,6 +15,7 @@ import math
 import numpy as np
 
 __all__ = ["MIN_CORNER_SINE", "fractions", "ring_folds", "side_grading"]
+
 #: Smallest corner sine (cross product of unit edges) of a soil quadrilateral of an o-grid ring
 #: below which the ring counts as folded: its cell side is then graded.
 MIN_CORNER_SINE = 0.1
@@ -33,7 +34,8 @@ def side_grading(centre: tuple[float, float], a: tuple[float, float], b: tuple[f
 
     With ratio ``c`` the middle of ``2 m`` edges lies at ``1 / (1 + c^m)`` of the side, so the
     node facing the pile's arc midpoint sits on the ray from the centre at right angles to the
-    side (for odd ``nq`` the same formula centres the distribution there).
+    side (for odd ``nq`` the same formula centres the distribution there). The projection is
+    kept within 5 % of the side's ends (a pile's cell keeps it well inside: ``cell_grid``).
     """
     d = np.subtract(b, a)
     s = float(np.dot(np.subtract(centre, a), d) / np.dot(d, d))
