@@ -348,6 +348,7 @@ def assert_lock_free(run: Path, wait_s: float = 10.0) -> None:
 @pytest.mark.mpi
 @settings(max_examples=4, derandomize=True, **COMMON)
 @example(lay=PIER667_5X5)
+@example(lay=RING_FOLDED)
 @given(lay=layouts(max_n=6))
 def test_layouts_mesh_on_two_ranks(lay, tmp_path_factory):
     folder = tmp_path_factory.mktemp("layout")
