@@ -148,7 +148,7 @@ FAR_FIELD_REFUSED = Layout(
 #: An outer pile 1.05 m from the cap's edges and 3.05 m from its cell's far side, one radial
 #: layer (h = 7 m) across the 0.35 m ring: evenly divided cell sides put the node facing the
 #: pile's arc 1 m along the side and folded the ring ("14 degenerate or inverted cells"); the
-#: side is now graded so that node faces the pile (geometry/plan.py, ``pile_cell``).
+#: side is now graded so that node faces the pile (geometry/ring.py, ``PlanView.grade_side``).
 RING_FOLDED = Layout(6, 6, 1.4, (2.51, 4.36), (0.25, 0.25, 0.25, 1.4), 10.0, diameters=(),
                      lengths=(), symmetry="auto", mesh=(("scale", 4.0),))
 
